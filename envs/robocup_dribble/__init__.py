@@ -1,0 +1,1 @@
+"""RoboCup 2D soccer simulator dribbling environment with heterogeneous players."""
