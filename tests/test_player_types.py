@@ -40,7 +40,8 @@ def assert_matches_printed(types: list[PlayerType], printed: list[dict]) -> None
     assert len(types) == len(printed)
     for t, p in zip(types, printed):
         for name in TYPE_FIELDS:
-            assert math.isclose(getattr(t, name), p[name], rel_tol=1e-5, abs_tol=1e-9), (p["id"], name, getattr(t, name), p[name])
+            ours = getattr(t, name)
+            assert math.isclose(ours, p[name], rel_tol=1e-5, abs_tol=1e-9), (p["id"], name, ours, p[name])
 
 
 def with_player(profile, **changes):
@@ -146,7 +147,8 @@ def test_seed_sweep_matches_server(golden):
 def test_server_runs_match(golden, run_name):
     run = golden["server_runs"][run_name]
     opts = run["options"]
-    server = {k.split("::", 1)[1]: float(v) for k, v in opts.items() if k.split("::", 1)[1] in {"player_rand", "ball_rand", "kick_rand", "min_dash_power"}}
+    noise_and_dash = {"player_rand", "ball_rand", "kick_rand", "min_dash_power"}
+    server = {k.split("::", 1)[1]: float(v) for k, v in opts.items() if k.split("::", 1)[1] in noise_and_dash}
     profile = make_profile("v19", **server)
     factor = opts.get("player::kick_rand_delta_factor")
     types = generate_player_types(profile, seed=opts["player::random_seed"], kick_rand_delta_factor=factor)

@@ -108,7 +108,8 @@ def default_player_type(profile: str | ServerProfile = "v19") -> PlayerType:
 
 def stack_player_types(types: Sequence[PlayerType]) -> np.ndarray:
     """Stack types into a ``(n, len(TYPE_FIELDS))`` float64 array, columns in :data:`TYPE_FIELDS` order."""
-    return np.array([[getattr(t, f) for f in TYPE_FIELDS] for t in types], dtype=np.float64).reshape(len(types), len(TYPE_FIELDS))
+    rows = [[getattr(t, f) for f in TYPE_FIELDS] for t in types]
+    return np.array(rows, dtype=np.float64).reshape(len(types), len(TYPE_FIELDS))
 
 
 class ServerRandom:
@@ -255,7 +256,8 @@ def generate_player_types(
     """
     prof = _profile(profile)
     if kick_rand_delta_factor is not None:
-        prof = dataclasses.replace(prof, player=dataclasses.replace(prof.player, kick_rand_delta_factor=kick_rand_delta_factor))
+        player = dataclasses.replace(prof.player, kick_rand_delta_factor=kick_rand_delta_factor)
+        prof = dataclasses.replace(prof, player=player)
     rng = ServerRandom(seed)
     return [default_player_type(prof)] + [_reference_type(prof, rng) for _ in range(1, prof.player.player_types)]
 
@@ -316,7 +318,9 @@ class _Plan:
 def _make_plan(profile: ServerProfile) -> _Plan:
     s, p = profile.server, profile.player
     # step: (delta bounds, {field: (a, b)}, rejection checks (a, b, strict)) in the server's order
-    stretch = (p.catchable_area_l_stretch_min, p.catchable_area_l_stretch_max) if profile.catchable_area_stretch else (1.0, 1.0)
+    stretch = (p.catchable_area_l_stretch_min, p.catchable_area_l_stretch_max)
+    if not profile.catchable_area_stretch:
+        stretch = (1.0, 1.0)  # no draw; the stretch stays 1
     steps = [
         ((p.player_speed_max_delta_min, p.player_speed_max_delta_max),
          {"player_speed_max": (s.player_speed_max, 1.0)},
@@ -328,7 +332,8 @@ def _make_plan(profile: ServerProfile) -> _Plan:
          {"player_size": (s.player_size, p.player_size_delta_factor)},
          [(s.dash_power_rate, 1.0, True), (s.player_size, p.player_size_delta_factor, True)]),
         ((p.new_dash_power_rate_delta_min, p.new_dash_power_rate_delta_max),
-         {"dash_power_rate": (s.dash_power_rate, 1.0), "stamina_inc_max": (s.stamina_inc_max, p.new_stamina_inc_max_delta_factor)},
+         {"dash_power_rate": (s.dash_power_rate, 1.0),
+          "stamina_inc_max": (s.stamina_inc_max, p.new_stamina_inc_max_delta_factor)},
          [(s.dash_power_rate, 1.0, True), (s.stamina_inc_max, p.new_stamina_inc_max_delta_factor, True)]),
         ((p.kickable_margin_delta_min, p.kickable_margin_delta_max),
          {"kickable_margin": (s.kickable_margin, 1.0), "kick_rand": (s.kick_rand, p.kick_rand_delta_factor)},
