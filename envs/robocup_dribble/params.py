@@ -69,6 +69,7 @@ class ServerParams:
     effort_inc_thr: float = 0.6
     effort_inc: float = 0.01
     player_speed_max_min: float = 0.75  # lower end of the heterogeneous acceptance window
+    foul_detect_probability: float = 0.5  # type 0 (v14+); carried by player types, unused by the physics
 
 
 @dataclass(frozen=True)
@@ -97,6 +98,7 @@ class PlayerParams:
     effort_min_delta_factor: float = -0.004
     kick_power_rate_delta_min: float = 0.0
     kick_power_rate_delta_max: float = 0.0
+    foul_detect_probability_delta_factor: float = 0.0
     catchable_area_l_stretch_min: float = 1.0
     catchable_area_l_stretch_max: float = 1.3
 
