@@ -221,3 +221,12 @@ def make_profile(profile: str | ServerProfile = "v19", **server_overrides: float
     if unknown:
         raise ValueError(f"Unknown server parameter(s) {unknown}; known: {sorted(known)}")
     return dataclasses.replace(base, server=dataclasses.replace(base.server, **server_overrides))
+
+
+def without_noise(profile: ServerProfile) -> ServerProfile:
+    """The profile with every noise source off: movement noise, kick noise, and no kick_rand for any player type."""
+    return dataclasses.replace(
+        profile,
+        server=dataclasses.replace(profile.server, player_rand=0.0, ball_rand=0.0, kick_rand=0.0),
+        player=dataclasses.replace(profile.player, kick_rand_delta_factor=0.0),
+    )

@@ -139,7 +139,7 @@ def step(
 # ---------------------------------------------------------------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _drand(lo: float, hi: float, u: float) -> float:
     """rcssserver's ``drand``: uniform in [lo, hi) (bounds swapped if reversed); the midpoint for an empty range."""
     if hi < lo:
@@ -149,8 +149,8 @@ def _drand(lo: float, hi: float, u: float) -> float:
     return lo + (hi - lo) * u
 
 
-@njit(cache=True, inline="always")
-def _normalize_angle(a: float) -> float:
+@njit(cache=True, error_model="numpy", inline="always")
+def normalize_angle(a: float) -> float:
     """Wrap an angle in radians to [-pi, pi]."""
     while a > math.pi:
         a -= 2.0 * math.pi
@@ -159,7 +159,7 @@ def _normalize_angle(a: float) -> float:
     return a
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _noise(r_max: float, u_r: float, u_a: float, box: bool) -> tuple[float, float]:
     """Movement/kick noise of size ``r_max``: polar (v12+, radius uniform) or box (v11), spec §5.2 and §3.5."""
     if box:
@@ -169,7 +169,7 @@ def _noise(r_max: float, u_r: float, u_a: float, box: bool) -> tuple[float, floa
     return radius * math.cos(angle), radius * math.sin(angle)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _dir_rate(direction: float, k: np.ndarray) -> float:
     """Dash efficiency by direction in degrees relative to the body (spec §2.2, v13+)."""
     d = abs(direction)
@@ -181,7 +181,7 @@ def _dir_rate(direction: float, k: np.ndarray) -> float:
     return min(max(rate, 0.0), 1.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _leg_accel(power: float, direction: float, body: float, effort: float, dash_power_rate: float, k: np.ndarray):
     """Acceleration of a dash (or of one leg) with effective power ``power`` (spec §2.3)."""
     rate = _dir_rate(direction, k) if k[K_DASH_DIRECTION] > 0.5 else 1.0
@@ -191,7 +191,7 @@ def _leg_accel(power: float, direction: float, body: float, effort: float, dash_
     return sign * magnitude * math.cos(heading), sign * magnitude * math.sin(heading)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _dash(s: np.ndarray, t: np.ndarray, power: float, direction: float, u_turn: float, k: np.ndarray):
     """Apply a dash: returns the player's acceleration; updates stamina (and body, for v19's two legs)."""
     power = min(max(power, k[K_MIN_DASH_POWER]), k[K_MAX_DASH_POWER])
@@ -231,12 +231,12 @@ def _dash(s: np.ndarray, t: np.ndarray, power: float, direction: float, u_turn: 
     ux, uy = math.cos(body), math.sin(body)
     omega = (ux * (s[P_VX] + lx) + uy * (s[P_VY] + ly) - ux * (s[P_VX] + rx) - uy * (s[P_VY] + ry)) / (2.0 * t[T_SIZE])
     rand = k[K_PLAYER_RAND]
-    s[P_BODY] = _normalize_angle(body + (1.0 + _drand(-rand, rand, u_turn)) * omega)
+    s[P_BODY] = normalize_angle(body + (1.0 + _drand(-rand, rand, u_turn)) * omega)
     s[S_STAMINA] = max(0.0, s[S_STAMINA] - cost)
     return 0.5 * (lx + rx), 0.5 * (ly + ry)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _kick(s: np.ndarray, t: np.ndarray, power: float, direction: float, u_r: float, u_a: float, k: np.ndarray):
     """A kick at command time: returns (accepted, ball acceleration x, y) (spec §3)."""
     power = min(max(power, k[K_MIN_POWER]), k[K_MAX_POWER])
@@ -247,7 +247,7 @@ def _kick(s: np.ndarray, t: np.ndarray, power: float, direction: float, u_r: flo
     if distance * distance > reach * reach:
         return False, 0.0, 0.0
     body = s[P_BODY]
-    dir_diff = abs(_normalize_angle(math.atan2(ry, rx) - body))
+    dir_diff = abs(normalize_angle(math.atan2(ry, rx) - body))
     dist_ball = distance - t[T_SIZE] - k[K_BALL_SIZE]
     effective = power * t[T_KICK_POWER_RATE] * (1.0 - 0.25 * dir_diff / math.pi - 0.25 * dist_ball / t[T_KICKABLE_MARGIN])
     ax = effective * math.cos(body + direction)
@@ -263,17 +263,17 @@ def _kick(s: np.ndarray, t: np.ndarray, power: float, direction: float, u_r: flo
     return True, ax + nx, ay + ny
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _turn(s: np.ndarray, t: np.ndarray, moment: float, u_turn: float, k: np.ndarray) -> None:
     """A turn: the body rotates by the moment over (1 + inertia * speed), with noise (spec §4)."""
     moment = math.radians(min(max(moment, k[K_MIN_MOMENT]), k[K_MAX_MOMENT]))
     rand = k[K_PLAYER_RAND]
     speed = math.hypot(s[P_VX], s[P_VY])
     turned = (1.0 + _drand(-rand, rand, u_turn)) * moment / (1.0 + t[T_INERTIA] * speed)
-    s[P_BODY] = _normalize_angle(s[P_BODY] + turned)
+    s[P_BODY] = normalize_angle(s[P_BODY] + turned)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _move(s: np.ndarray, ix: int, ax: float, ay: float, accel_max: float, speed_max: float, rand: float,
           decay: float, u_r: float, u_a: float, box: bool) -> None:
     """``MPObject::_inc`` for the object whose columns start at ``ix`` (spec §5.1)."""
@@ -292,7 +292,7 @@ def _move(s: np.ndarray, ix: int, ax: float, ay: float, accel_max: float, speed_
     s[ix + 2], s[ix + 3] = decay * vx, decay * vy
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _collide(s: np.ndarray, t: np.ndarray, u: float, k: np.ndarray) -> bool:
     """Resolve a ball-player overlap by the midpoint push-out; both velocities times -0.1 (spec §6.1)."""
     reach = k[K_BALL_SIZE] + t[T_SIZE]
@@ -325,7 +325,7 @@ def _collide(s: np.ndarray, t: np.ndarray, u: float, k: np.ndarray) -> bool:
     return collided
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _update_stamina(s: np.ndarray, t: np.ndarray, k: np.ndarray) -> None:
     """``Player::updateStamina``: recovery and effort decay, effort rise, stamina recovery and capacity (spec §2.5)."""
     stamina_max = k[K_STAMINA_MAX]
@@ -346,23 +346,29 @@ def _update_stamina(s: np.ndarray, t: np.ndarray, k: np.ndarray) -> None:
         s[S_CAPACITY] = max(0.0, s[S_CAPACITY] - increase)
 
 
-@njit(cache=True)
-def _step_lanes(state, types, commands, uniforms, k, events) -> None:
+@njit(cache=True, error_model="numpy")
+def step_lane(s: np.ndarray, t: np.ndarray, c: np.ndarray, u: np.ndarray, k: np.ndarray, events: np.ndarray) -> None:
+    """One server cycle of one lane (rows of the arrays :func:`step` takes); compiled code may call it directly."""
     box = k[K_BOX_NOISE] > 0.5
+    kind = int(c[C_KIND])
+    ball_ax = ball_ay = player_ax = player_ay = 0.0
+    events[E_KICK_OK] = False
+    if kind == CMD_KICK:
+        ok, ball_ax, ball_ay = _kick(s, t, c[C_POWER], c[C_DIRECTION], u[U_KICK_R], u[U_KICK_A], k)
+        events[E_KICK_OK] = ok
+    elif kind == CMD_TURN:
+        _turn(s, t, c[C_POWER], u[U_TURN], k)
+    elif kind == CMD_DASH:
+        player_ax, player_ay = _dash(s, t, c[C_POWER], c[C_DIRECTION], u[U_TURN], k)
+    _move(s, B_X, ball_ax, ball_ay, k[K_BALL_ACCEL_MAX], k[K_BALL_SPEED_MAX], k[K_BALL_RAND], k[K_BALL_DECAY],
+          u[U_BALL_R], u[U_BALL_A], box)
+    _move(s, P_X, player_ax, player_ay, k[K_PLAYER_ACCEL_MAX], t[T_SPEED_MAX], k[K_PLAYER_RAND], t[T_DECAY],
+          u[U_PLAYER_R], u[U_PLAYER_A], box)
+    events[E_COLLISION] = _collide(s, t, u[U_COLLIDE], k)
+    _update_stamina(s, t, k)
+
+
+@njit(cache=True, error_model="numpy")
+def _step_lanes(state, types, commands, uniforms, k, events) -> None:
     for i in range(state.shape[0]):
-        s, t, c, u = state[i], types[i], commands[i], uniforms[i]
-        kind = int(c[C_KIND])
-        ball_ax = ball_ay = player_ax = player_ay = 0.0
-        if kind == CMD_KICK:
-            ok, ball_ax, ball_ay = _kick(s, t, c[C_POWER], c[C_DIRECTION], u[U_KICK_R], u[U_KICK_A], k)
-            events[i, E_KICK_OK] = ok
-        elif kind == CMD_TURN:
-            _turn(s, t, c[C_POWER], u[U_TURN], k)
-        elif kind == CMD_DASH:
-            player_ax, player_ay = _dash(s, t, c[C_POWER], c[C_DIRECTION], u[U_TURN], k)
-        _move(s, B_X, ball_ax, ball_ay, k[K_BALL_ACCEL_MAX], k[K_BALL_SPEED_MAX], k[K_BALL_RAND], k[K_BALL_DECAY],
-              u[U_BALL_R], u[U_BALL_A], box)
-        _move(s, P_X, player_ax, player_ay, k[K_PLAYER_ACCEL_MAX], t[T_SPEED_MAX], k[K_PLAYER_RAND], t[T_DECAY],
-              u[U_PLAYER_R], u[U_PLAYER_A], box)
-        events[i, E_COLLISION] = _collide(s, t, u[U_COLLIDE], k)
-        _update_stamina(s, t, k)
+        step_lane(state[i], types[i], commands[i], uniforms[i], k, events[i])
