@@ -192,8 +192,8 @@ class DribbleVecEnv(VecEnv):
     def __init__(self, n_envs: int, profile: str | ServerProfile = "v19", noise: bool = True, render_mode: str | None = None, **task_kwargs: Any) -> None:
         self.profile, self.task = _configure(profile, noise, render_mode, task_kwargs)
         self._lanes = DribbleLanes(n_envs, self.profile, self.task, seeding.np_random()[0])
-        super().__init__(n_envs, self._lanes.observation_space, skills.action_space(self.profile))
         self.render_mode = render_mode
+        super().__init__(n_envs, self._lanes.observation_space, skills.action_space(self.profile))
         self._all = np.arange(self.num_envs)
         self._returns = np.zeros(self.num_envs)
         self._t_start = time.time()

@@ -17,10 +17,11 @@ action type           parameters (units, range)  server command this cycle
 2 ``KICK_POSITION``   x, y (m, ±2, body frame)    the kick that puts the ball at ``(x, y)`` (body frame) from the
                                                  player's own position one cycle later (the player coasts while it
                                                  kicks).
-3 ``KICK_ALIGN``      speed (m/cycle, 0..ball     the kick that makes the ball run along the player's direction of
-                      speed max), offset (m, ±1)  travel (its velocity, or the body direction when it stands) at
+3 ``KICK_ALIGN``      speed (m/cycle, 0..ball     the kick that makes the ball run along the player's running
+                      speed max), offset (m, ±1)  direction (its body direction, along which DASH_MAX(0) runs) at
                                                  ``speed``, with lateral ``offset`` (positive to the player's right,
-                                                 i.e. +y when running along +x) from the player one cycle later.
+                                                 i.e. +y when facing +x) from the player one cycle later. (Its
+                                                 velocity would be a worse axis: it starts in a random direction.)
 ====================  =========================  ===================================================================
 
 Every kick aims at a target ball velocity; when the ball cannot reach it with maximum power (the kick's effective
@@ -133,13 +134,9 @@ def command_lane(s: np.ndarray, t: np.ndarray, kind: int, p: np.ndarray, k: np.n
         gx = s[physics.P_X] + s[physics.P_VX] + x * math.cos(body) - y * math.sin(body)
         gy = s[physics.P_Y] + s[physics.P_VY] + x * math.sin(body) + y * math.cos(body)
         _kick_toward(s, t, gx - s[physics.B_X], gy - s[physics.B_Y], k, command)
-    else:  # KICK_ALIGN: along the direction of travel, with a lateral offset from the player's next position
-        speed_now = math.hypot(s[physics.P_VX], s[physics.P_VY])
-        if speed_now > 1e-6:
-            tx, ty = s[physics.P_VX] / speed_now, s[physics.P_VY] / speed_now
-        else:
-            tx, ty = math.cos(body), math.sin(body)
-        nx, ny = -ty, tx  # the player's right-hand side (+y when running along +x)
+    else:  # KICK_ALIGN: along the body (running) direction, with a lateral offset from the player's next position
+        tx, ty = math.cos(body), math.sin(body)
+        nx, ny = -ty, tx  # the player's right-hand side (+y when facing +x)
         lateral = (s[physics.B_X] - s[physics.P_X] - s[physics.P_VX]) * nx + (s[physics.B_Y] - s[physics.P_Y] - s[physics.P_VY]) * ny
         correction = p[PARAM_ALIGN_OFFSET] - lateral
         speed = p[PARAM_ALIGN_SPEED]

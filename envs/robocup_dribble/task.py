@@ -63,8 +63,8 @@ class DribbleTask:
     border_width: float = 0.1
     close_margin: float = 0.1
     start_player_speed: float = 0.3
-    start_ball_speed: float = 0.2
-    start_clearance: float = 0.05
+    start_ball_speed: float = 0.1
+    start_clearance: float = 0.1
 
     def __post_init__(self) -> None:
         for name in ("max_actions", "episodes_per_type_set"):

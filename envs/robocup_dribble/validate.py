@@ -116,34 +116,50 @@ def parse_command(text: str | None) -> tuple[int, float, float]:
     return _COMMANDS[words[0]], values[0], values[1] if len(values) > 1 else 0.0
 
 
-def replay_case(case: dict, rtol: float = RTOL, atol: float = ATOL) -> CaseResult:
-    """Replay one deterministic case and measure its largest deviation from the recording."""
-    profile = case_profile(case)
-    player_type = case_player_type(case, profile)
-    state = physics.new_state(1)
-    types = stack_player_types([player_type])
+def simulate_case(
+    case: dict, runs: int = 1, rng: np.random.Generator | None = None, profile: ServerProfile | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Run a recorded case's commands from its set-up in ``runs`` independent lanes.
+
+    :param rng: source of the noise draws; None runs noise-free (every draw 0.5, right for zero noise parameters).
+    :param profile: the server profile to simulate; default :func:`case_profile` (the recorded server).
+    :return: states ``(runs, cycles, STATE_SIZE)`` after each cycle and events ``(runs, cycles, EVENT_SIZE)``.
+    """
+    profile = profile or case_profile(case)
+    types = np.repeat(stack_player_types([case_player_type(case, profile)]), runs, axis=0)
+    state = physics.new_state(runs)
     physics.recover(state, types, profile)
     player, ball = case["setup"]["player"], case["setup"]["ball"]
-    state[0, [physics.P_X, physics.P_Y, physics.P_VX, physics.P_VY]] = player["x"], player["y"], player["vx"], player["vy"]
-    state[0, physics.P_BODY] = math.radians(player["body"])
-    state[0, [physics.B_X, physics.B_Y, physics.B_VX, physics.B_VY]] = ball["x"], ball["y"], ball["vx"], ball["vy"]
+    state[:, [physics.P_X, physics.P_Y, physics.P_VX, physics.P_VY]] = player["x"], player["y"], player["vx"], player["vy"]
+    state[:, physics.P_BODY] = math.radians(player["body"])
+    state[:, [physics.B_X, physics.B_Y, physics.B_VX, physics.B_VY]] = ball["x"], ball["y"], ball["vx"], ball["vy"]
     constants = physics.profile_constants(profile)
-    uniforms = np.full((1, physics.N_UNIFORMS), 0.5)  # noise parameters are zero in deterministic cases
+    states, events = [], []
+    for command in case["commands"]:
+        commands = np.tile(np.array(parse_command(command), dtype=np.float64), (runs, 1))
+        uniforms = np.full((runs, physics.N_UNIFORMS), 0.5) if rng is None else rng.random((runs, physics.N_UNIFORMS))
+        events.append(physics.step(state, types, commands, uniforms, constants))
+        states.append(state.copy())
+    return np.stack(states, axis=1), np.stack(events, axis=1)
 
+
+def replay_case(case: dict, rtol: float = RTOL, atol: float = ATOL) -> CaseResult:
+    """Replay one deterministic case and measure its largest deviation from the recording."""
+    states, events = simulate_case(case)
     worst = (0.0, 0.0, "", 0)  # ratio, abs error, field, cycle
     mismatches: list[str] = []
     for cycle, (command, recorded) in enumerate(zip(case["commands"], case["states"], strict=True), start=1):
-        events = physics.step(state, types, np.array([parse_command(command)], dtype=np.float64), uniforms, constants)
+        state, event = states[0, cycle - 1], events[0, cycle - 1]
         for name, read, column in _COMPARED:
-            worst = max(worst, _deviation(state[0, column], read(recorded), rtol, atol, name, cycle))
-        body = math.degrees(state[0, physics.P_BODY])
+            worst = max(worst, _deviation(state[column], read(recorded), rtol, atol, name, cycle))
+        body = math.degrees(state[physics.P_BODY])
         body_error = abs((body - recorded["player"]["body"] + 180.0) % 360.0 - 180.0)
         worst = max(worst, (body_error / (rtol * abs(recorded["player"]["body"]) + 1e-4), body_error, "player.body", cycle))
         collided = "ball" in recorded.get("collision", [])
-        if bool(events[0, physics.E_COLLISION]) != collided:
+        if bool(event[physics.E_COLLISION]) != collided:
             mismatches.append(f"collision at cycle {cycle}: recorded {collided}")
         if recorded.get("kick_ok") is not None and command and command.startswith("(kick"):
-            if bool(events[0, physics.E_KICK_OK]) != recorded["kick_ok"]:
+            if bool(event[physics.E_KICK_OK]) != recorded["kick_ok"]:
                 mismatches.append(f"kick_ok at cycle {cycle}: recorded {recorded['kick_ok']}")
     ratio, error, field, cycle = worst
     return CaseResult(case.get("id", "?"), len(case["states"]), error, ratio, field, cycle, tuple(mismatches))
