@@ -232,10 +232,15 @@ class DribbleVecEnv(VecEnv):
         finished = np.flatnonzero(dones)
         if len(finished):
             elapsed = round(time.time() - self._t_start, 6)
-            for i in finished.tolist():
-                infos[i]["terminal_observation"] = obs[i].copy()
-                infos[i]["TimeLimit.truncated"] = bool(truncated[i])
-                infos[i]["episode"] = {"r": float(self._returns[i]), "l": int(self._lanes.steps[i]), "t": elapsed}
+            terminal = obs[finished]  # a copy: obs rows are overwritten by the reset below
+            returns = self._returns[finished].tolist()
+            lengths = self._lanes.steps[finished].tolist()
+            timeouts = truncated[finished].tolist()
+            for j, i in enumerate(finished.tolist()):
+                info = infos[i]
+                info["terminal_observation"] = terminal[j]
+                info["TimeLimit.truncated"] = timeouts[j]
+                info["episode"] = {"r": returns[j], "l": lengths[j], "t": elapsed}
             self._returns[finished] = 0.0
             obs[finished] = self._start(finished)
         return obs, reward.astype(np.float32), dones, infos
