@@ -2,8 +2,10 @@
 
 Usage: ``python benchmarks/env_speed.py [--profile v19] [--seconds 2]``
 
-Every figure steps the same kind of actions: uniformly random action types and parameters drawn once from a fixed
-seed (episodes are short under random actions, so resets are included at their worst rate). Each measurement is
+Two action streams are timed. "random": uniformly random action types and parameters drawn once from a fixed seed;
+the ball is lost within about two steps, so resets run at their worst rate. "holding": KICK_POSITION(0.6, 0.4) every
+cycle, which keeps the ball beside the player, so episodes run their full 35 actions as under a good dribbler (a
+mix of kicks and dashes costs about the same per step). Each measurement is
 the best of three runs of about ``--seconds`` / 3 each, which damps a shared machine's noise; the ratios compare
 runs made seconds apart in the same process. Targets (issue 2): a single-env step <= 30 us, >= 1,000,000
 player-steps/s at N = 4096 on one core.
@@ -57,9 +59,22 @@ def main() -> None:
     args = parser.parse_args()
     rng = np.random.default_rng(0)
     kinds, params = random_actions(args.profile, ACTIONS, rng)
-    tuples = [as_tuple(k, p) for k, p in zip(kinds, params)]
+    holding = np.zeros(skills.N_PARAMS)
+    holding[[skills.PARAM_POSITION_X, skills.PARAM_POSITION_Y]] = 0.6, 0.4
+    streams = {
+        "random": (kinds, params),
+        "holding": (np.full(ACTIONS, skills.KICK_POSITION), np.tile(holding, (ACTIONS, 1))),
+    }
+    print(f"profile {args.profile}; best of 3 runs per figure")
+    for name, (stream_kinds, stream_params) in streams.items():
+        print(f"\n== {name} actions ==")
+        measure(args.profile, stream_kinds, stream_params, args.seconds)
 
-    env = DribbleEnv(profile=args.profile)
+
+def measure(profile: str, kinds: np.ndarray, params: np.ndarray, seconds: float) -> None:
+    """Print single-env, DummyVecEnv and batched figures for one action stream."""
+    tuples = [as_tuple(k, p) for k, p in zip(kinds, params)]
+    env = DribbleEnv(profile=profile)
     env.reset(seed=0)
     counts = {"steps": 0, "episodes": 0}
 
@@ -72,7 +87,7 @@ def main() -> None:
         counts["steps"] += k
         return k
 
-    dummy = DummyVecEnv([lambda: DribbleEnv(profile=args.profile)])
+    dummy = DummyVecEnv([lambda: DribbleEnv(profile=profile)])
     dummy.seed(0)
     dummy.reset()
 
@@ -81,26 +96,25 @@ def main() -> None:
             dummy.step([tuples[i % ACTIONS]])
         return k
 
-    single_rate = best_rate(single, args.seconds)
-    dummy_rate = best_rate(dummy_step, args.seconds)
-    mean_length = counts["steps"] / max(1, counts["episodes"])
-    print(f"profile {args.profile}; random actions, {mean_length:.1f} steps per episode on average (resets included)")
-    print(f"single DribbleEnv.step:           {single_rate:>12,.0f} steps/s   ({1e6 / single_rate:6.1f} us/step)")
-    print(f"SB3 DummyVecEnv([DribbleEnv]):     {dummy_rate:>12,.0f} steps/s   ({1e6 / dummy_rate:6.1f} us/step)")
+    single_rate = best_rate(single, seconds)
+    dummy_rate = best_rate(dummy_step, seconds)
+    print(f"mean episode length {counts['steps'] / max(1, counts['episodes']):.1f} steps")
+    print(f"single DribbleEnv.step:             {single_rate:>12,.0f} steps/s         ({1e6 / single_rate:6.1f} us/step)")
+    print(f"SB3 DummyVecEnv([DribbleEnv]).step: {dummy_rate:>12,.0f} steps/s         ({1e6 / dummy_rate:6.1f} us/step)")
     for n in (1, 64, 4096):
-        vec = DribbleVecEnv(n, profile=args.profile)
+        vec = DribbleVecEnv(n, profile=profile)
         vec.seed(0)
         vec.reset()
-        batches = [(np.roll(kinds, -j)[:n] if n <= ACTIONS else rng.integers(4, size=n),
-                    np.roll(params, -j, axis=0)[:n] if n <= ACTIONS else rng.uniform(-1, 1, (n, 7))) for j in range(8)]
+        batches = [(np.resize(np.roll(kinds, -j), n), np.resize(np.roll(params, -j, axis=0), (n, skills.N_PARAMS)))
+                   for j in range(8)]
 
         def packed(k: int, vec=vec, batches=batches, n=n) -> int:
             for i in range(k):
                 vec.step_packed(*batches[i % 8])
             return k * n
 
-        rate = best_rate(packed, args.seconds)
-        print(f"DribbleVecEnv({n:>4}).step_packed: {rate:>12,.0f} player-steps/s  ({rate / dummy_rate:6.1f}x DummyVecEnv)")
+        rate = best_rate(packed, seconds)
+        print(f"DribbleVecEnv({n:>4}).step_packed:    {rate:>12,.0f} player-steps/s  ({rate / dummy_rate:6.1f}x DummyVecEnv)")
         if n == 64:
             tuple_batches = [[tuples[(j + i) % ACTIONS] for i in range(n)] for j in range(8)]
 
@@ -109,8 +123,8 @@ def main() -> None:
                     vec.step(tuple_batches[i % 8])
                 return k * n
 
-            rate = best_rate(via_tuples, args.seconds)
-            print(f"DribbleVecEnv({n:>4}).step (tuples):{rate:>12,.0f} player-steps/s  ({rate / dummy_rate:6.1f}x DummyVecEnv)")
+            rate = best_rate(via_tuples, seconds)
+            print(f"DribbleVecEnv({n:>4}).step (tuples):  {rate:>12,.0f} player-steps/s  ({rate / dummy_rate:6.1f}x DummyVecEnv)")
 
 
 if __name__ == "__main__":

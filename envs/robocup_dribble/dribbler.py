@@ -11,6 +11,7 @@ clear of the player) and gets furthest along +x. The rollouts are noise-free and
 from __future__ import annotations
 
 import itertools
+from typing import Any
 
 import numpy as np
 
@@ -87,6 +88,12 @@ class HandCodedDribbler:
         score = (100.0 * cycles_kept + 10.0 * safe + state[:, physics.P_X]).reshape(n, c)
         best = np.argmax(score, axis=1)
         return self.candidate_kinds[best], self.candidate_params[best]
+
+    def predict(self, obs: np.ndarray, state: Any = None, episode_start: Any = None, deterministic: bool = True):
+        """SB3-style ``predict``: one Tuple action for one observation, an object array of them for a batch."""
+        single = np.asarray(obs).ndim == 1
+        actions = skills.as_env_actions(*self.act(obs))
+        return (actions[0] if single else actions), None
 
     def _rebuild(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Physics state and player types from observations (player at the origin facing +x)."""

@@ -74,6 +74,15 @@ def action_space(profile: ServerProfile) -> spaces.Tuple:
     return spaces.Tuple((spaces.Discrete(N_ACTION_TYPES), spaces.Tuple(boxes)))
 
 
+def as_env_actions(action_types: np.ndarray, params: np.ndarray) -> np.ndarray:
+    """A batch ``(N,)`` types and ``(N, 7)`` parameters as an ``(N,)`` object array of per-lane Tuple actions."""
+    actions = np.empty(len(action_types), dtype=object)
+    params32 = np.asarray(params, dtype=np.float32)
+    for i, kind in enumerate(np.asarray(action_types).tolist()):
+        actions[i] = (kind, tuple(params32[i, s] for s in PARAM_SLICES))
+    return actions
+
+
 def commands_for(
     state: np.ndarray, types: np.ndarray, action_types: np.ndarray, params: np.ndarray, constants: np.ndarray
 ) -> np.ndarray:
