@@ -38,15 +38,14 @@ def _configure(profile: str | ServerProfile, noise: bool, render_mode: str | Non
 def parse_action(action: Any) -> tuple[int, np.ndarray]:
     """``(k, (p_dash, p_kick_velocity, p_kick_position, p_kick_align))`` -> ``(k, (7,) params)``."""
     try:
-        action_type, (dash, kick_velocity, kick_position, kick_align) = action
-        parts = (np.ravel(dash), np.ravel(kick_velocity), np.ravel(kick_position), np.ravel(kick_align))
-        params = np.concatenate(parts).astype(np.float64, copy=False)
+        action_type, parts = action
+        params = np.concatenate(parts, axis=None, dtype=np.float64)  # axis=None flattens each part
+        sizes = tuple(part.size if type(part) is np.ndarray else np.size(part) for part in parts)
     except (TypeError, ValueError) as error:
         raise ValueError(
             f"An action must be (action_type, (dash (1,), kick_velocity (2,), kick_position (2,), kick_align (2,))), got {action!r}"
         ) from error
-    if params.size != 7 or tuple(part.size for part in parts) != (1, 2, 2, 2):
-        sizes = tuple(part.size for part in parts)
+    if sizes != (1, 2, 2, 2):
         raise ValueError(f"The parameter vectors of an action must have sizes (1, 2, 2, 2), got {sizes} in {action!r}")
     if isinstance(action_type, (bool, np.bool_)) or not float(action_type).is_integer():
         raise ValueError(f"The action type must be an integer in 0..{skills.N_ACTION_TYPES - 1}, got {action_type!r}")
