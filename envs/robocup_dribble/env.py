@@ -10,6 +10,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.utils import seeding
+from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
 from robocup_dribble import physics, skills
@@ -274,4 +275,6 @@ class DribbleVecEnv(VecEnv):
         raise AttributeError(f"DribbleVecEnv has no per-lane sub-environments to call {method_name!r} on")
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
-        return [False] * len(self._get_indices(indices))
+        """Lanes are not wrapped, but they report SB3 ``Monitor``'s episode statistics, so ``Monitor`` answers True
+        (SB3's ``evaluate_policy`` asks this to know whether ``info["episode"]`` is there)."""
+        return [issubclass(wrapper_class, Monitor)] * len(self._get_indices(indices))
