@@ -198,10 +198,6 @@ class BankKernel:
         else:
             self.w, self.b = bank.weight.data.numpy(), bank.bias.data.numpy()
 
-    def arrays(self) -> list[np.ndarray]:
-        """The trainable arrays (views), each with the approximator index first."""
-        return [self.w1, self.b1, self.w2, self.b2] if self.mlp else [self.w, self.b]
-
     def features(self, obs: np.ndarray) -> np.ndarray:
         """``obs``: ``(n, D)`` -> ``(n, F)`` float64."""
         if not self.rbf:

@@ -165,7 +165,8 @@ class ParameterizedActionSpec:
     def scale(self, params: np.ndarray) -> np.ndarray:
         """Map parameters from ``[low, high]`` to ``[-1, 1]``. ``params``: ``(..., n_params)``; degenerate bounds give 0."""
         half = self._half
-        return np.divide(np.asarray(params, dtype=np.float64) - self._mid, half, out=np.zeros(np.shape(params)), where=half > 0)
+        centred = np.asarray(params, dtype=np.float64) - self._mid
+        return np.divide(centred, half, out=np.zeros(centred.shape), where=half > 0)
 
     def unscale(self, params_scaled: np.ndarray) -> np.ndarray:
         """Map parameters from ``[-1, 1]`` to ``[low, high]`` and clip them inside the bounds. Shape ``(..., n_params)``."""

@@ -153,18 +153,26 @@ class SarsaAACPolicy(BasePolicy):
         return self.actions_from_outputs(out, vectorized=vectorized), state
 
 
+_PRESET_PARAMS = """
+    :param observation_space: A ``Box`` observation space (see :class:`SarsaAACPolicy`)
+    :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
+    :param hidden_units: Hidden tanh units of each approximator, or ``None`` for linear approximators
+    :param n_rbf: Gaussian RBFs per observation input, or ``None`` to feed the scaled inputs directly
+    :param rbf_width: RBF standard deviation in units of the centre spacing (1.0, chosen by us)
+    :param obs_bounds: ``(low, high)`` for input scaling and RBF placement; defaults to the observation space's
+        bounds
+"""
+
+
 class MlpPolicy(SarsaAACPolicy):
-    """
+    __doc__ = (
+        """
     Multilayer perceptrons (Uc-Cetina 2013, Fig. 5): each approximator has one hidden tanh layer over the scaled
-    observation. The paper tried 2, 10 and 20 hidden units; the default 10 is ours.
-
-    Observation inputs with infinite bounds are fed unscaled; give ``obs_bounds`` to scale them.
-
-    :param observation_space: See :class:`SarsaAACPolicy`
-    :param action_space: See :class:`SarsaAACPolicy`
-    :param hidden_units: Hidden units per approximator
-    :param obs_bounds: See :class:`SarsaAACPolicy`
-    """
+    observation. The paper tried 2, 10 and 20 hidden units (2 was the most reliable on dribbling); the default 10
+    is ours. Observation inputs with infinite bounds are fed unscaled unless ``obs_bounds`` is given.
+"""
+        + _PRESET_PARAMS
+    )
 
     def __init__(
         self,
@@ -179,18 +187,14 @@ class MlpPolicy(SarsaAACPolicy):
 
 
 class RbfMlpPolicy(SarsaAACPolicy):
-    """
+    __doc__ = (
+        """
     Multilayer perceptrons behind a Gaussian RBF filter layer (Uc-Cetina 2013, Fig. 6): each input feeds
-    ``n_rbf`` Gaussians (10 in the paper) and those feed one hidden tanh layer (2, 10 or 20 units in the paper;
-    the default 10 is ours).
-
-    :param observation_space: See :class:`SarsaAACPolicy`
-    :param action_space: See :class:`SarsaAACPolicy`
-    :param hidden_units: Hidden units per approximator
-    :param n_rbf: Gaussian RBFs per input
-    :param rbf_width: See :class:`SarsaAACPolicy`
-    :param obs_bounds: See :class:`SarsaAACPolicy`
-    """
+    ``n_rbf`` Gaussians (10 in the paper, the default) and those feed one hidden tanh layer (2, 10 or 20 units in
+    the paper; the default 10 is ours).
+"""
+        + _PRESET_PARAMS
+    )
 
     def __init__(
         self,
@@ -205,17 +209,14 @@ class RbfMlpPolicy(SarsaAACPolicy):
 
 
 class RbfPolicy(SarsaAACPolicy):
-    """
-    Arrays of Gaussian RBFs with a linear output (Uc-Cetina 2013, Fig. 7): one array of ``n_rbf`` Gaussians per
-    input (10, 30 or 50 in the paper; default 10), a linear approximator on top. The paper's best family.
-
-    :param observation_space: See :class:`SarsaAACPolicy`
-    :param action_space: See :class:`SarsaAACPolicy`
-    :param hidden_units: ``None`` (linear); an int turns this into :class:`RbfMlpPolicy`
-    :param n_rbf: Gaussian RBFs per input
-    :param rbf_width: See :class:`SarsaAACPolicy`
-    :param obs_bounds: See :class:`SarsaAACPolicy`
-    """
+    __doc__ = (
+        """
+    Arrays of Gaussian RBFs with a linear output (Uc-Cetina 2013, Fig. 7), the paper's best family: one array
+    of ``n_rbf`` Gaussians per input (10, 30 or 50 in the paper; default 10) and a linear approximator on top
+    (``hidden_units=None``).
+"""
+        + _PRESET_PARAMS
+    )
 
     def __init__(
         self,

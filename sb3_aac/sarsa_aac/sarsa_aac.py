@@ -18,6 +18,8 @@ from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, Sarsa
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
 
 TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
+# Schedules are re-evaluated whenever training progress has moved by this much (0.1%), not at every step.
+SCHEDULE_RESOLUTION = 1e-3
 
 
 def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator) -> np.ndarray:
@@ -67,7 +69,8 @@ class SarsaAAC(BaseAlgorithm):
     Exploration (chosen by us; the paper does not describe it, and without it the CACLA update would be a
     no-op): epsilon-greedy (or Boltzmann) over action types and Gaussian noise of standard deviation
     ``param_noise`` on the scaled parameters; both decay linearly over the first ``exploration_fraction`` of
-    training. Executed parameters are clipped to the action space's bounds.
+    training. Executed parameters are clipped to the action space's bounds. Schedules (exploration and learning
+    rates) are re-evaluated every 0.1% of training progress rather than at every step.
 
     Every approximator takes normalised steps (see :mod:`sb3_aac.common.approximators`): a learning rate of 1
     moves a linear approximator's output onto its target for that sample, so rates lie in ``(0, 1]``.
@@ -202,7 +205,9 @@ class SarsaAAC(BaseAlgorithm):
     def _excluded_save_params(self) -> list[str]:
         return [
             *super()._excluded_save_params(),
-            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts", "_ep_keyword_buffers"),
+            # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
+            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
+            "_ep_keyword_buffers",
         ]
 
     # ------------------------------------------------------------------ acting
@@ -213,7 +218,7 @@ class SarsaAAC(BaseAlgorithm):
         k = select_types(out[:, policy.q_slice], self.exploration_rate, self.type_exploration, self._rng)
         params = out[:, policy.param_slice]
         if self.param_noise > 0:
-            params = params + self.param_noise * self._rng.standard_normal(params.shape)
+            params = self._rng.normal(params, self.param_noise)
         else:
             params = params.copy()
         # In place: np.clip costs several times more on small arrays.
@@ -281,6 +286,7 @@ class SarsaAAC(BaseAlgorithm):
             obs = self._last_obs.reshape(self.n_envs, -1)  # type: ignore[union-attr]
             self._pending = (obs, *self._explore(self._kernel.forward(obs)[0]))
 
+        self._update_schedules()
         callback.on_rollout_start()
         try:
             while self.num_timesteps < total_timesteps:
@@ -300,23 +306,34 @@ class SarsaAAC(BaseAlgorithm):
                 self._last_obs, self._last_episode_starts = new_obs, dones
                 if any_done:
                     self._on_episodes_end(dones, infos, log_interval)
+            self._flush_td_chunks()
         finally:
             if self.device.type != "cpu":
                 self.policy.to(self.device)
-        self._flush_td_chunks()
         callback.on_rollout_end()
         callback.on_training_end()
         return self
 
-    def _train_step(self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict], any_done: bool) -> None:
+    def _update_schedules(self) -> None:
+        """Evaluate the exploration and learning-rate schedules at the current progress."""
+        progress = self._schedule_progress = self._current_progress_remaining
+        self.exploration_rate = self.exploration_schedule(progress)
+        self.param_noise = self.param_noise_schedule(progress)
+        policy, lr = self.policy, self._lr
+        lr[policy.q_slice] = self.q_lr_schedule(progress)
+        lr[policy.param_slice] = self.param_lr_schedule(progress)
+        lr[policy.value_index] = self.lr_schedule(progress)
+
+    def _train_step(
+        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict], any_done: bool
+    ) -> None:
         """One SARSA-AAC update of every approximator, for all envs at once; then choose the next action."""
         policy, kernel, gamma = self.policy, self._kernel, self.gamma
         obs, k, params = self._pending  # type: ignore[misc]
         n, vi, ps = len(k), policy.value_index, policy.param_slice
         rows = self._rows if len(self._rows) == n else np.arange(n)
-        progress = self._current_progress_remaining
-        self.exploration_rate = self.exploration_schedule(progress)
-        self.param_noise = self.param_noise_schedule(progress)
+        if self._current_progress_remaining < self._schedule_progress - SCHEDULE_RESOLUTION:
+            self._update_schedules()
 
         next_obs = new_obs.reshape(n, -1)
         discount = np.where(dones, 0.0, gamma)
@@ -348,11 +365,7 @@ class SarsaAAC(BaseAlgorithm):
         np.subtract(params, current[:, ps], out=err[:, ps])
         err[:, ps] *= policy.param_table[np.where(delta > 0, k, policy.n_types)]
         err[:, vi] = delta
-        lr = self._lr
-        lr[policy.q_slice] = self.q_lr_schedule(progress)
-        lr[ps] = self.param_lr_schedule(progress)
-        lr[vi] = self.lr_schedule(progress)
-        kernel.update(cache, err, lr)
+        kernel.update(cache, err, self._lr)
         self._n_updates += 1
 
         self._pending = (next_obs, next_k, next_params)
@@ -387,7 +400,7 @@ class SarsaAAC(BaseAlgorithm):
         self._type_counts += np.bincount(k, minlength=len(self._type_counts))
 
     def _check_weights(self) -> None:
-        arrays = self.policy.kernel().arrays()
+        arrays = [p.detach().cpu().numpy() for p in self.policy.approximators.parameters()]
         n_outputs = self.policy.value_index + 1
         finite = np.ones(n_outputs, dtype=bool)
         for array in arrays:
