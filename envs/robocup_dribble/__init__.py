@@ -1,1 +1,34 @@
-"""RoboCup 2D soccer simulator dribbling environment with heterogeneous players."""
+"""RoboCup 2D soccer simulator dribbling with heterogeneous players, as Gymnasium and Stable-Baselines3 environments.
+
+Registered ids: ``RoboCupDribble-v0`` (rcssserver 19 physics) and ``RoboCupDribblePaper-v0`` (the 2007 v11 server of
+Uc-Cetina 2013: 7 player types, no dash direction, box noise).
+"""
+
+from gymnasium.envs.registration import register
+
+from robocup_dribble.env import DribbleEnv, DribbleVecEnv
+from robocup_dribble.params import PROFILES, ServerProfile, make_profile
+from robocup_dribble.player_types import PlayerType, generate_player_types
+from robocup_dribble.skills import ACTION_NAMES, DASH_MAX, KICK_ALIGN, KICK_POSITION, KICK_VELOCITY, PARAM_NAMES
+from robocup_dribble.task import OBSERVATION_NAMES, DribbleTask
+
+register(id="RoboCupDribble-v0", entry_point="robocup_dribble.env:DribbleEnv", kwargs={"profile": "v19"})
+register(id="RoboCupDribblePaper-v0", entry_point="robocup_dribble.env:DribbleEnv", kwargs={"profile": "v11"})
+
+__all__ = [
+    "ACTION_NAMES",
+    "DASH_MAX",
+    "KICK_ALIGN",
+    "KICK_POSITION",
+    "KICK_VELOCITY",
+    "OBSERVATION_NAMES",
+    "PARAM_NAMES",
+    "PROFILES",
+    "DribbleEnv",
+    "DribbleTask",
+    "DribbleVecEnv",
+    "PlayerType",
+    "ServerProfile",
+    "generate_player_types",
+    "make_profile",
+]

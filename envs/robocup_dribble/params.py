@@ -69,6 +69,7 @@ class ServerParams:
     effort_inc_thr: float = 0.6
     effort_inc: float = 0.01
     player_speed_max_min: float = 0.75  # lower end of the heterogeneous acceptance window
+    foul_detect_probability: float = 0.5  # type 0 (v14+); carried by player types, unused by the physics
 
 
 @dataclass(frozen=True)
@@ -97,6 +98,7 @@ class PlayerParams:
     effort_min_delta_factor: float = -0.004
     kick_power_rate_delta_min: float = 0.0
     kick_power_rate_delta_max: float = 0.0
+    foul_detect_probability_delta_factor: float = 0.0
     catchable_area_l_stretch_min: float = 1.0
     catchable_area_l_stretch_max: float = 1.3
 
@@ -219,3 +221,12 @@ def make_profile(profile: str | ServerProfile = "v19", **server_overrides: float
     if unknown:
         raise ValueError(f"Unknown server parameter(s) {unknown}; known: {sorted(known)}")
     return dataclasses.replace(base, server=dataclasses.replace(base.server, **server_overrides))
+
+
+def without_noise(profile: ServerProfile) -> ServerProfile:
+    """The profile with every noise source off: movement noise, kick noise, and no kick_rand for any player type."""
+    return dataclasses.replace(
+        profile,
+        server=dataclasses.replace(profile.server, player_rand=0.0, ball_rand=0.0, kick_rand=0.0),
+        player=dataclasses.replace(profile.player, kick_rand_delta_factor=0.0),
+    )

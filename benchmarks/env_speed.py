@@ -1,0 +1,131 @@
+"""How fast the dribbling environment steps: one env, SB3's DummyVecEnv of it, and the batched DribbleVecEnv.
+
+Usage: ``python benchmarks/env_speed.py [--profile v19] [--seconds 2]``
+
+Two action streams are timed. "random": uniformly random action types and parameters drawn once from a fixed seed;
+the ball is lost within about two steps, so resets run at their worst rate. "holding": KICK_POSITION(0.6, 0.4) every
+cycle, which keeps the ball beside the player, so episodes run their full 35 actions as under a good dribbler (a
+mix of kicks and dashes costs about the same per step). Each measurement is
+the best of three runs of about ``--seconds`` / 3 each, which damps a shared machine's noise; the ratios compare
+runs made seconds apart in the same process. Targets (issue 2): a single-env step <= 30 us, >= 1,000,000
+player-steps/s at N = 4096 on one core.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable
+
+import numpy as np
+from stable_baselines3.common.vec_env import DummyVecEnv
+
+from robocup_dribble import DribbleEnv, DribbleVecEnv, skills
+
+ACTIONS = 4096  # distinct pre-drawn actions, cycled
+
+
+def random_actions(profile: str, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` random action types and parameters inside the action space's bounds."""
+    low, high = skills.parameter_bounds(DribbleEnv(profile=profile).profile)
+    return rng.integers(skills.N_ACTION_TYPES, size=n), rng.uniform(low, high, size=(n, skills.N_PARAMS))
+
+
+def as_tuple(kind: int, params: np.ndarray):
+    return int(kind), tuple(params[s].astype(np.float32) for s in skills.PARAM_SLICES)
+
+
+def best_rate(run: Callable[[int], int], seconds: float) -> float:
+    """Largest items/s over three runs; ``run(k)`` does k iterations and returns the items processed."""
+    iterations = 1
+    while True:  # calibrate the iteration count to about a third of the budget
+        start = time.perf_counter()
+        run(iterations)
+        if time.perf_counter() - start > seconds / 30 or iterations > 1_000_000:
+            break
+        iterations *= 4
+    rates = []
+    for _ in range(3):
+        start = time.perf_counter()
+        items = run(iterations * 10)
+        rates.append(items / (time.perf_counter() - start))
+    return max(rates)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--profile", default="v19", choices=["v19", "v11"])
+    parser.add_argument("--seconds", type=float, default=2.0, help="time budget per measurement")
+    args = parser.parse_args()
+    rng = np.random.default_rng(0)
+    kinds, params = random_actions(args.profile, ACTIONS, rng)
+    holding = np.zeros(skills.N_PARAMS)
+    holding[[skills.PARAM_POSITION_X, skills.PARAM_POSITION_Y]] = 0.6, 0.4
+    streams = {
+        "random": (kinds, params),
+        "holding": (np.full(ACTIONS, skills.KICK_POSITION), np.tile(holding, (ACTIONS, 1))),
+    }
+    print(f"profile {args.profile}; best of 3 runs per figure")
+    for name, (stream_kinds, stream_params) in streams.items():
+        print(f"\n== {name} actions ==")
+        measure(args.profile, stream_kinds, stream_params, args.seconds)
+
+
+def measure(profile: str, kinds: np.ndarray, params: np.ndarray, seconds: float) -> None:
+    """Print single-env, DummyVecEnv and batched figures for one action stream."""
+    tuples = [as_tuple(k, p) for k, p in zip(kinds, params)]
+    env = DribbleEnv(profile=profile)
+    env.reset(seed=0)
+    counts = {"steps": 0, "episodes": 0}
+
+    def single(k: int) -> int:
+        for i in range(k):
+            _, _, terminated, truncated, _ = env.step(tuples[i % ACTIONS])
+            if terminated or truncated:
+                env.reset()
+                counts["episodes"] += 1
+        counts["steps"] += k
+        return k
+
+    dummy = DummyVecEnv([lambda: DribbleEnv(profile=profile)])
+    dummy.seed(0)
+    dummy.reset()
+
+    def dummy_step(k: int) -> int:
+        for i in range(k):
+            dummy.step([tuples[i % ACTIONS]])
+        return k
+
+    single_rate = best_rate(single, seconds)
+    dummy_rate = best_rate(dummy_step, seconds)
+    print(f"mean episode length {counts['steps'] / max(1, counts['episodes']):.1f} steps")
+    print(f"single DribbleEnv.step:             {single_rate:>12,.0f} steps/s         ({1e6 / single_rate:6.1f} us/step)")
+    print(f"SB3 DummyVecEnv([DribbleEnv]).step: {dummy_rate:>12,.0f} steps/s         ({1e6 / dummy_rate:6.1f} us/step)")
+    for n in (1, 64, 4096):
+        vec = DribbleVecEnv(n, profile=profile)
+        vec.seed(0)
+        vec.reset()
+        batches = [(np.resize(np.roll(kinds, -j), n), np.resize(np.roll(params, -j, axis=0), (n, skills.N_PARAMS)))
+                   for j in range(8)]
+
+        def packed(k: int, vec=vec, batches=batches, n=n) -> int:
+            for i in range(k):
+                vec.step_packed(*batches[i % 8])
+            return k * n
+
+        rate = best_rate(packed, seconds)
+        print(f"DribbleVecEnv({n:>4}).step_packed:    {rate:>12,.0f} player-steps/s  ({rate / dummy_rate:6.1f}x DummyVecEnv)")
+        if n == 64:
+            tuple_batches = [[tuples[(j + i) % ACTIONS] for i in range(n)] for j in range(8)]
+
+            def via_tuples(k: int, vec=vec, tuple_batches=tuple_batches, n=n) -> int:
+                for i in range(k):
+                    vec.step(tuple_batches[i % 8])
+                return k * n
+
+            rate = best_rate(via_tuples, seconds)
+            print(f"DribbleVecEnv({n:>4}).step (tuples):  {rate:>12,.0f} player-steps/s  ({rate / dummy_rate:6.1f}x DummyVecEnv)")
+
+
+if __name__ == "__main__":
+    main()
