@@ -3,7 +3,6 @@ import os
 import numpy as np
 import pytest
 import torch as th
-from helpers import POLICIES
 from stable_baselines3.common.callbacks import (
     BaseCallback,
     CallbackList,
@@ -21,6 +20,7 @@ from stable_baselines3.common.logger import configure
 
 from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
+from tests.helpers import POLICIES
 
 
 class Counter(BaseCallback):

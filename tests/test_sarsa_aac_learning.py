@@ -2,12 +2,12 @@
 
 import pytest
 import torch as th
-from helpers import POLICIES
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 
 from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
+from tests.helpers import POLICIES
 
 # Faster-than-default rates and wider initial parameter noise for a short run; tuned on seeds 0-2.
 HYPERPARAMETERS = dict(learning_rate=0.3, q_learning_rate=0.3, param_learning_rate=0.3, param_noise_initial=0.5)

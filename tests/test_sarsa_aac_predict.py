@@ -1,11 +1,11 @@
 import numpy as np
 import pytest
 import torch as th
-from helpers import LAYOUTS, POLICIES
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
+from tests.helpers import LAYOUTS, POLICIES
 
 
 @pytest.mark.parametrize("policy", POLICIES)

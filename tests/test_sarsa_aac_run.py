@@ -2,7 +2,6 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium import spaces
-from helpers import LAYOUTS, POLICIES, OneStepEnv
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
@@ -10,6 +9,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 from sb3_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
 from sb3_aac.sarsa_aac.sarsa_aac import select_types
+from tests.helpers import LAYOUTS, POLICIES, OneStepEnv
 
 
 @pytest.mark.parametrize("policy", POLICIES)

@@ -4,13 +4,13 @@ import zipfile
 import numpy as np
 import pytest
 import torch as th
-from helpers import POLICIES
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
 from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy
+from tests.helpers import POLICIES
 
 
 def same_actions(a, b):
