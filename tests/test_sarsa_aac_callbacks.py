@@ -140,3 +140,19 @@ def test_log_interval_none_never_dumps(tmp_path):
     model.set_logger(configure(str(tmp_path), ["csv"]))
     model.learn(300, log_interval=None)
     assert (tmp_path / "progress.csv").read_text() == ""
+
+
+def test_stopping_keeps_the_latest_observation():
+    """A callback that stops training skips that step's update; the next learn() continues from new_obs."""
+    seen = {}
+
+    def stop_at_three(_locals, _globals):
+        seen["new_obs"] = _locals["new_obs"]
+        return _locals["self"].num_timesteps < 3
+
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
+    model.learn(100, callback=stop_at_three)
+    assert model.num_timesteps == 3 and model._n_updates == 2
+    assert model._last_obs is seen["new_obs"]
+    model.learn(10, reset_num_timesteps=False)
+    assert model.num_timesteps == 13 and model._n_updates == 12

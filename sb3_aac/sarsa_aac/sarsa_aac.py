@@ -193,7 +193,7 @@ class SarsaAAC(BaseAlgorithm):
         self.policy = self.policy.to(self.device)
         # The action a' chosen at _last_obs and not yet executed: (obs (n, D), k (n,), scaled params (n, P)).
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._ep_keyword_buffers = {key: deque(maxlen=self._stats_window_size) for key in self.info_keywords}
+        self._reset_keyword_buffers()
         self._reset_train_stats()
 
     def set_random_seed(self, seed: int | None = None) -> None:
@@ -276,6 +276,8 @@ class SarsaAAC(BaseAlgorithm):
         total_timesteps, callback = self._setup_learn(
             total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
         )
+        if reset_num_timesteps:  # like ep_info_buffer in _setup_learn
+            self._reset_keyword_buffers()
         callback.on_training_start(locals(), globals())
         assert self.env is not None
         env = self.env
@@ -297,6 +299,8 @@ class SarsaAAC(BaseAlgorithm):
 
                 callback.update_locals(locals())
                 if not callback.on_step():
+                    # The env has moved on without an update: choose afresh at new_obs next time.
+                    self._last_obs, self._last_episode_starts, self._pending = new_obs, dones, None
                     break
 
                 self._update_info_buffer(infos, dones)
@@ -374,6 +378,10 @@ class SarsaAAC(BaseAlgorithm):
             self._flush_td_chunks()
 
     # ------------------------------------------------------------------ statistics and logging
+
+    def _reset_keyword_buffers(self) -> None:
+        """Windows of the ``info_keywords`` values of finished episodes (like ``ep_info_buffer``)."""
+        self._ep_keyword_buffers = {key: deque(maxlen=self._stats_window_size) for key in self.info_keywords}
 
     def _reset_train_stats(self) -> None:
         n_types = self.policy.n_types
