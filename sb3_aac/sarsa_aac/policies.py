@@ -70,8 +70,9 @@ class SarsaAACPolicy(BasePolicy):
         self.q_slice = slice(0, self.n_types)
         self.param_slice = slice(self.n_types, self.n_types + self.n_params)
         self.value_index = self.n_types + self.n_params
-        # param_table[k, j] = 1 if scalar parameter j belongs to type k; the extra row K is all zeros.
-        self.param_table = np.vstack([self.spec.param_type == np.arange(self.n_types)[:, None], np.zeros(self.n_params)])
+        # param_table[u, k, j] = 1 if u == 1 and scalar parameter j belongs to type k (u: "update or not").
+        owns = (self.spec.param_type == np.arange(self.n_types)[:, None]).astype(np.float64)
+        self.param_table = np.stack([np.zeros_like(owns), owns])
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
         # Not super()'s: it adds normalize_images, which these policies do not take.

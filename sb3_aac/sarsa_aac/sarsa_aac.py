@@ -218,7 +218,8 @@ class SarsaAAC(BaseAlgorithm):
         k = select_types(out[:, policy.q_slice], self.exploration_rate, self.type_exploration, self._rng)
         params = out[:, policy.param_slice]
         if self.param_noise > 0:
-            params = self._rng.normal(params, self.param_noise)
+            # Not Generator.normal(params, ...): with an array mean it costs several times more.
+            params = params + self.param_noise * self._rng.standard_normal(params.shape)
         else:
             params = params.copy()
         # In place: np.clip costs several times more on small arrays.
@@ -360,14 +361,13 @@ class SarsaAAC(BaseAlgorithm):
             q_next[truncated] = terminal[np.arange(len(truncated)), self._explore(terminal)[0]]
             discount[truncated] = gamma
 
+        rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
         delta = rewards + discount * v_next - current[:, vi]
         q_error = rewards + discount * q_next - current[rows, k]
         err = np.zeros_like(current)
         err[rows, k] = q_error
-        # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0
-        # (row K of the table, all zeros, masks the others out).
-        np.subtract(params, current[:, ps], out=err[:, ps])
-        err[:, ps] *= policy.param_table[np.where(delta > 0, k, policy.n_types)]
+        # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0.
+        err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
         err[:, vi] = delta
         kernel.update(cache, err, self._lr)
         self._n_updates += 1
