@@ -10,7 +10,9 @@ DQN cannot take its Tuple actions, so this script flattens them just for the com
 
 These stand-ins will be replaced by the dribbling env and the project's action wrappers.
 
-Usage: ``python benchmarks/algo_speed.py [--steps 20000] [--n-envs 1 4 16] [--policy RbfPolicy]``
+Usage: ``python benchmarks/algo_speed.py [--steps 20000] [--n-envs 1 4 16] [--policy RbfPolicy] [--torch-threads 1]``
+
+Single runs on a shared machine: repeat them, and report the load average next to the numbers.
 """
 
 from __future__ import annotations
@@ -102,7 +104,11 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=20_000, help="env steps per training measurement")
     parser.add_argument("--n-envs", type=int, nargs="+", default=[1, 4, 16])
     parser.add_argument("--policy", default="RbfPolicy", help="SarsaAAC policy")
+    parser.add_argument(
+        "--torch-threads", type=int, default=1, help="torch threads for PPO/DQN (1 is fastest at these sizes on a busy box)"
+    )
     args = parser.parse_args()
+    th.set_num_threads(args.torch_threads)
     print(f"torch threads: {th.get_num_threads()}, steps per measurement: {args.steps}, SarsaAAC policy: {args.policy}")
     print(f"{'n_envs':>6} {'SarsaAAC':>10} {'PPO':>8} {'DQN':>8} {'vs PPO':>7} {'vs DQN':>7}   (env steps/s)")
     for n_envs in args.n_envs:

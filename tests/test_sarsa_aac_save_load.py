@@ -146,3 +146,12 @@ def test_load_corrupted_file(tmp_path, corruption):
 def test_load_missing_file(tmp_path):
     with pytest.raises(FileNotFoundError):
         SarsaAAC.load(tmp_path / "nothing.zip")
+
+
+def test_load_other_algorithm_file(tmp_path):
+    from stable_baselines3 import DQN
+    from stable_baselines3.common.envs import IdentityEnv
+
+    DQN("MlpPolicy", IdentityEnv(3), learning_starts=0).save(tmp_path / "dqn.zip")
+    with pytest.raises(ValueError, match="SarsaAAC needs a SarsaAACPolicy .* got <class .*DQNPolicy'> .*another algorithm"):
+        SarsaAAC.load(tmp_path / "dqn.zip")

@@ -152,6 +152,11 @@ class SarsaAAC(BaseAlgorithm):
             # The action space is validated (with a ValueError) when the policy parses it.
             supported_action_spaces=None,
         )
+        if not (isinstance(self.policy_class, type) and issubclass(self.policy_class, SarsaAACPolicy)):
+            raise ValueError(
+                f"SarsaAAC needs a SarsaAACPolicy ({', '.join(self.policy_aliases)} or a subclass), got {self.policy_class} "
+                "(loading a model saved by another algorithm?)"
+            )
         self.q_learning_rate = q_learning_rate
         self.param_learning_rate = param_learning_rate
         self.gamma = gamma
@@ -286,7 +291,7 @@ class SarsaAAC(BaseAlgorithm):
             self.policy.to("cpu")  # the updates are numpy on CPU storage
         self._kernel = self.policy.rebind()
         if self._pending is None or self._last_obs is not obs_before:
-            obs = self._last_obs.reshape(self.n_envs, -1)  # type: ignore[union-attr]
+            obs = self._last_obs.astype(np.float64).reshape(self.n_envs, -1)  # type: ignore[union-attr]
             self._pending = (obs, *self._explore(self._kernel.forward(obs)[0]))
 
         self._update_schedules()
@@ -340,7 +345,8 @@ class SarsaAAC(BaseAlgorithm):
         if self._current_progress_remaining < self._schedule_progress - SCHEDULE_RESOLUTION:
             self._update_schedules()
 
-        next_obs = new_obs.reshape(n, -1)
+        # An owned float64 copy: kept until the next step (a VecEnv may reuse its buffer) and no mixed dtypes.
+        next_obs = new_obs.astype(np.float64).reshape(n, -1)
         discount = np.where(dones, 0.0, gamma)
         # Time-limit truncations bootstrap from the terminal observation (new_obs already holds the reset one).
         truncated = [i for i in np.flatnonzero(dones) if infos[i].get("TimeLimit.truncated", False)] if any_done else []
@@ -506,4 +512,6 @@ class SarsaAAC(BaseAlgorithm):
         except (zipfile.BadZipFile, EOFError, AssertionError, KeyError, RuntimeError, OSError) as e:
             if isinstance(e, FileNotFoundError):
                 raise
-            raise ValueError(f"{path} is not a complete SarsaAAC model: the file is corrupted or truncated ({e!r})") from e
+            raise ValueError(
+                f"{path} is not a complete SarsaAAC model (corrupted, truncated, or saved by another algorithm): {e!r}"
+            ) from e
