@@ -159,7 +159,7 @@ class ApproximatorBank(nn.Module):
 
     def __getstate__(self) -> dict:
         # A copy (deepcopy, pickle) gets new storage, so it must not inherit views of ours.
-        return {**super().__getstate__(), "_kernel": None}
+        return {**self.__dict__, "_kernel": None}  # not super(): object.__getstate__ is Python 3.11+
 
     def _apply(self, fn, recurse=True):  # type: ignore[no-untyped-def]
         # Device and dtype moves replace the storage the numpy views point to.
