@@ -1,0 +1,241 @@
+"""
+Banks of independent function approximators, stored as batched tensors and trained in closed form with numpy.
+
+An :class:`ApproximatorBank` holds ``A`` independent approximators ``f_a(s)``, ``a = 0..A-1``, of one observation
+``s``. It is a fixed feature layer followed by a head:
+
+- feature layer (no trainable weights), ``x = phi(s)`` with ``F`` features:
+
+  - ``n_rbf=None``: the inputs scaled affinely from ``[low, high]`` to ``[-1, 1]`` (``F = D``);
+  - ``n_rbf=m``: per-input arrays of ``m`` Gaussian radial basis functions on the scaled inputs,
+    ``x[i*m + j] = exp(-(s~_i - c_ij)**2 / (2 * sigma_ij**2))`` (``F = D*m``);
+
+- head, one per approximator (the heads share the features but no weights):
+
+  - ``hidden_units=None``: linear, ``f_a = weight[a] . x + bias[a]``;
+  - ``hidden_units=H``: one hidden tanh layer,
+    ``f_a = weight2[a] . tanh(weight1[a] @ x + bias1[a]) + bias2[a]``.
+
+The three function approximators of Uc-Cetina (2013, Sec. 4.2) are the configurations
+(``n_rbf=None``, ``H``) (MLP), (``m``, ``H``) (MLP with an RBF filter layer) and (``m``, ``None``) (RBF arrays).
+
+Training is per-sample gradient descent on ``0.5 * err**2`` with a *normalised* step size (chosen by us; the paper
+gives none): each layer's step is divided by ``1 + ||input of that layer||**2``. For a linear head this is the
+normalised LMS rule, so a learning rate of 1 moves that sample's output all the way to its target and any rate in
+``(0, 1]`` is stable whatever the number of features; the default rates therefore work for 10, 30 or 50 RBFs per
+input alike. Updates from the ``n`` samples of a batch (one per environment) are summed.
+
+The hot path (:class:`BankKernel`) is numpy working on zero-copy views of the CPU parameter tensors, so SB3's
+``state_dict``-based save/load keeps working while no torch op runs per step. ``forward`` is the torch twin of the
+same function, for use on other devices and as a reference.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import torch as th
+from torch import nn
+
+
+def _uniform(shape: tuple[int, ...], bound: float) -> nn.Parameter:
+    # Weights are updated by hand (no autograd); float64 keeps many tiny online steps accurate.
+    return nn.Parameter(th.empty(shape, dtype=th.float64).uniform_(-bound, bound), requires_grad=False)
+
+
+def rbf_layout(n_inputs: int, n_rbf: int, rbf_width: float) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Evenly spaced Gaussian RBF centres on ``[-1, 1]`` for each scaled input, with widths ``rbf_width * spacing``.
+
+    :return: ``centers`` and ``widths``, each of shape ``(n_inputs, n_rbf)``
+    """
+    if n_rbf < 1:
+        raise ValueError(f"n_rbf must be >= 1, got {n_rbf}")
+    if not rbf_width > 0:
+        raise ValueError(f"rbf_width must be > 0, got {rbf_width}")
+    centers = np.linspace(-1.0, 1.0, n_rbf) if n_rbf > 1 else np.zeros(1)
+    spacing = 2.0 / (n_rbf - 1) if n_rbf > 1 else 2.0
+    return np.tile(centers, (n_inputs, 1)), np.full((n_inputs, n_rbf), rbf_width * spacing)
+
+
+class BankCache(NamedTuple):
+    """What :meth:`BankKernel.forward` computed and :meth:`BankKernel.update` needs. ``n`` rows."""
+
+    x: np.ndarray  # (n, F) features
+    hidden: np.ndarray | None  # (n, A, H) tanh activations, None for a linear head
+
+
+
+
+class ApproximatorBank(nn.Module):
+    """
+    ``n_outputs`` independent function approximators of one observation vector (see the module docstring).
+
+    :param low: ``(D,)`` lower bounds of the observation used for scaling and RBF placement
+    :param high: ``(D,)`` upper bounds. An input with an infinite bound is not scaled (only allowed without RBFs)
+    :param n_outputs: Number of approximators ``A``
+    :param n_rbf: Gaussian RBFs per input, or ``None`` for the scaled inputs themselves
+    :param rbf_width: RBF standard deviation in units of the centre spacing
+    :param hidden_units: Hidden tanh units of each approximator, or ``None`` for a linear head
+    """
+
+    def __init__(
+        self,
+        low: np.ndarray,
+        high: np.ndarray,
+        n_outputs: int,
+        n_rbf: int | None = None,
+        rbf_width: float = 1.0,
+        hidden_units: int | None = None,
+    ):
+        super().__init__()
+        low, high = np.asarray(low, dtype=np.float64).ravel(), np.asarray(high, dtype=np.float64).ravel()
+        if low.shape != high.shape or not np.all(low < high):
+            raise ValueError(f"Need low < high elementwise with equal shapes, got low={low}, high={high}")
+        finite = np.isfinite(low) & np.isfinite(high)
+        if n_rbf is not None and not finite.all():
+            raise ValueError(
+                f"RBF features need finite bounds for every input, got low={low}, high={high}; "
+                "pass finite bounds for the RBF placement (policy_kwargs obs_bounds=(low, high))"
+            )
+        if hidden_units is not None and hidden_units < 1:
+            raise ValueError(f"hidden_units must be >= 1 or None, got {hidden_units}")
+        self.n_inputs, self.n_outputs = len(low), n_outputs
+        self.n_rbf, self.hidden_units = n_rbf, hidden_units
+        low, high = np.where(finite, low, -1.0), np.where(finite, high, 1.0)  # unscaled: mid 0, half-range 1
+        self.register_buffer("obs_mid", th.as_tensor((high + low) / 2))
+        self.register_buffer("obs_half", th.as_tensor((high - low) / 2))
+        if n_rbf is not None:
+            centers, widths = rbf_layout(self.n_inputs, n_rbf, rbf_width)
+            self.register_buffer("rbf_centers", th.as_tensor(centers))
+            self.register_buffer("rbf_widths", th.as_tensor(widths))
+        self.n_features = self.n_inputs * (n_rbf or 1)
+        f, a = self.n_features, n_outputs
+        # Fan-in scaled uniform initialisation, like torch.nn.Linear (the paper only says "at random").
+        if hidden_units is None:
+            self.weight = _uniform((a, f), 1 / math.sqrt(f))
+            self.bias = _uniform((a,), 1 / math.sqrt(f))
+        else:
+            h = hidden_units
+            self.weight1 = _uniform((a, h, f), 1 / math.sqrt(f))
+            self.bias1 = _uniform((a, h), 1 / math.sqrt(f))
+            self.weight2 = _uniform((a, h), 1 / math.sqrt(h))
+            self.bias2 = _uniform((a,), 1 / math.sqrt(h))
+        self._kernel: BankKernel | None = None
+        # load_state_dict copies in place, but the kernel's constants derived from the buffers would go stale.
+        self.register_load_state_dict_post_hook(lambda module, incompatible_keys: module.invalidate_kernel())
+
+    def features(self, obs: th.Tensor) -> th.Tensor:
+        """Torch feature layer. ``obs``: ``(n, D)`` -> ``(n, F)``."""
+        x = (obs.to(th.float64) - self.obs_mid) / self.obs_half
+        if self.n_rbf is None:
+            return x
+        z = (x[:, :, None] - self.rbf_centers) / self.rbf_widths
+        return th.exp(-0.5 * z * z).reshape(len(obs), -1)
+
+    def forward(self, obs: th.Tensor) -> th.Tensor:
+        """Torch evaluation of every approximator. ``obs``: ``(n, D)`` -> ``(n, A)``."""
+        x = self.features(obs)
+        if self.hidden_units is None:
+            return x @ self.weight.T + self.bias
+        hidden = th.tanh(th.einsum("nf,ahf->nah", x, self.weight1) + self.bias1)
+        return (hidden * self.weight2).sum(-1) + self.bias2
+
+    def numpy_kernel(self) -> BankKernel:
+        """
+        Numpy evaluation and update on zero-copy views of the (CPU) parameters, built once and cached.
+
+        The cache is dropped on device/dtype moves and after ``load_state_dict``; after assigning a tensor's
+        ``.data`` directly, call :meth:`invalidate_kernel`.
+        """
+        if self._kernel is None:
+            self._kernel = BankKernel(self)
+        return self._kernel
+
+    def invalidate_kernel(self) -> None:
+        self._kernel = None
+
+    def __getstate__(self) -> dict:
+        # A copy (deepcopy, pickle) gets new storage, so it must not inherit views of ours.
+        return {**self.__dict__, "_kernel": None}  # not super(): object.__getstate__ is Python 3.11+
+
+    def _apply(self, fn, recurse=True):  # type: ignore[no-untyped-def]
+        # Device and dtype moves replace the storage the numpy views point to.
+        self._kernel = None
+        return super()._apply(fn, recurse)
+
+
+class BankKernel:
+    """
+    Closed-form numpy forward pass and update of an :class:`ApproximatorBank`.
+
+    It holds views of the bank's CPU parameters, so updates write straight into the module, and constants
+    derived from its buffers (input scaling, RBF centres and widths).
+    """
+
+    def __init__(self, bank: ApproximatorBank):
+        if bank.obs_mid.device.type != "cpu":
+            raise ValueError(f"The numpy kernel needs CPU tensors, the bank is on {bank.obs_mid.device}")
+        # Scaled input: obs * scale - shift.
+        scale = 1.0 / bank.obs_half.numpy()
+        shift = bank.obs_mid.numpy() * scale
+        self.rbf = bank.n_rbf is not None
+        if self.rbf:
+            # exp(-0.5 * ((obs * scale - shift - c) / w)**2) = exp(-(obs * rbf_a - rbf_b)**2)
+            inv_w = np.sqrt(0.5) / bank.rbf_widths.numpy()
+            self.rbf_a = scale[:, None] * inv_w
+            self.rbf_b = (shift[:, None] + bank.rbf_centers.numpy()) * inv_w
+        else:
+            self.scale, self.shift = scale, shift
+        self.mlp = bank.hidden_units is not None
+        a = bank.n_outputs
+        if self.mlp:
+            self.w1, self.b1 = bank.weight1.data.numpy(), bank.bias1.data.numpy()
+            self.w2, self.b2 = bank.weight2.data.numpy(), bank.bias2.data.numpy()
+            self.w1_flat, self.b1_flat = self.w1.reshape(a * bank.hidden_units, -1), self.b1.reshape(-1)
+        else:
+            self.w, self.b = bank.weight.data.numpy(), bank.bias.data.numpy()
+
+    def features(self, obs: np.ndarray) -> np.ndarray:
+        """``obs``: ``(n, D)`` -> ``(n, F)`` float64."""
+        if not self.rbf:
+            return obs * self.scale - self.shift
+        z = obs[:, :, None] * self.rbf_a - self.rbf_b
+        return np.exp(-(z * z)).reshape(len(obs), -1)
+
+    def forward(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache]:
+        """``obs``: ``(n, D)`` -> outputs ``(n, A)`` and the cache for :meth:`update`."""
+        x = self.features(obs)
+        if not self.mlp:
+            return x @ self.w.T + self.b, BankCache(x, None)
+        hidden = np.tanh(x @ self.w1_flat.T + self.b1_flat).reshape(len(x), *self.w2.shape)
+        return (hidden * self.w2).sum(2) + self.b2, BankCache(x, hidden)
+
+    def update(self, cache: BankCache, err: np.ndarray, lr: np.ndarray) -> None:
+        """
+        One normalised gradient step on ``0.5 * err**2`` per sample, summed over the samples, in place.
+
+        :param cache: from :meth:`forward` on the same weights; its first ``n`` rows are used
+        :param err: ``(n, A)`` target minus output; 0 leaves an approximator unchanged for that sample
+        :param lr: ``(A,)`` learning rate of each approximator
+        """
+        n = len(err)
+        x = cache.x[:n]
+        x_norm = 1.0 / (1.0 + np.einsum("nf,nf->n", x, x))  # (n,)
+        g = err * lr  # (n, A)
+        if not self.mlp:
+            g *= x_norm[:, None]
+            self.w += g.T @ x
+            self.b += g.sum(0)
+            return
+        h = cache.hidden[:n]  # (n, A, H)
+        # Backpropagate through the old output weights before changing them.
+        g_hidden = (g[:, :, None] * self.w2) * (1.0 - h * h) * x_norm[:, None, None]  # (n, A, H)
+        g_out = g / (1.0 + np.einsum("nah,nah->na", h, h))  # (n, A)
+        self.w2 += np.einsum("na,nah->ah", g_out, h)
+        self.b2 += g_out.sum(0)
+        g_hidden = g_hidden.reshape(n, -1)
+        self.w1_flat += g_hidden.T @ x
+        self.b1_flat += g_hidden.sum(0)

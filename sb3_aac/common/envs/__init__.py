@@ -1,0 +1,3 @@
+from sb3_aac.common.envs.parameterized_target_env import ParameterizedTargetEnv
+
+__all__ = ["ParameterizedTargetEnv"]

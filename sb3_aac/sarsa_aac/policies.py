@@ -1,0 +1,231 @@
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch as th
+from gymnasium import spaces
+from stable_baselines3.common.policies import BasePolicy
+from stable_baselines3.common.type_aliases import PyTorchObs
+
+from sb3_aac.common.approximators import ApproximatorBank, BankCache, BankKernel
+from sb3_aac.common.spaces import ParameterizedActionSpec
+
+
+class SarsaAACPolicy(BasePolicy):
+    """
+    Policy of SARSA Actor-Actor-Critic: the action-type actor, the parameter actor and the critic.
+
+    All ``A = K + n_params + 1`` outputs are independent function approximators (Uc-Cetina 2013, Fig. 3) kept in
+    one :class:`~sb3_aac.common.approximators.ApproximatorBank`, column by column:
+    ``Q_0..Q_{K-1}`` (action-type actor), then one approximator per scalar parameter in the order of
+    :class:`~sb3_aac.common.spaces.ParameterizedActionSpec` (parameter actor, outputs in the scaled ``[-1, 1]``
+    space), then ``V`` (critic).
+
+    ``predict`` is greedy: the type with the greatest Q, and that type's parameter outputs clipped to the bounds.
+    Exploration belongs to the algorithm (see :meth:`SarsaAAC.predict <sb3_aac.SarsaAAC.predict>`).
+
+    :param observation_space: A ``Box`` observation space (any shape; it is flattened)
+    :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
+    :param hidden_units: Hidden tanh units of each approximator, or ``None`` for linear approximators
+    :param n_rbf: Gaussian RBFs per observation input, or ``None`` to feed the scaled inputs directly
+    :param rbf_width: RBF standard deviation in units of the spacing between centres (chosen by us: 1.0,
+        the paper gives no value)
+    :param obs_bounds: ``(low, high)`` used to scale the inputs to ``[-1, 1]`` and to place the RBF centres
+        evenly; defaults to the observation space's bounds. Without RBFs, inputs with infinite bounds are
+        passed through unscaled.
+    """
+
+    def __init__(
+        self,
+        observation_space: spaces.Space,
+        action_space: spaces.Space,
+        hidden_units: int | None = 10,
+        n_rbf: int | None = None,
+        rbf_width: float = 1.0,
+        obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    ):
+        if not isinstance(observation_space, spaces.Box):
+            raise ValueError(
+                f"Unsupported observation space {observation_space}: SarsaAAC policies take a Box observation "
+                "(flatten Dict/Tuple observations first, e.g. with gymnasium.wrappers.FlattenObservation)"
+            )
+        super().__init__(observation_space, action_space)
+        self.spec = ParameterizedActionSpec.from_space(action_space)
+        self.hidden_units, self.n_rbf, self.rbf_width = hidden_units, n_rbf, rbf_width
+        self.obs_bounds = obs_bounds
+        low, high = (observation_space.low, observation_space.high) if obs_bounds is None else obs_bounds
+        n_inputs = int(np.prod(observation_space.shape))
+        low, high = (np.broadcast_to(np.asarray(b, dtype=np.float64).ravel(), (n_inputs,)) for b in (low, high))
+        if n_rbf is not None and not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
+            raise ValueError(
+                f"The observation space {observation_space} has infinite bounds, so RBF centres cannot be placed: "
+                "pass policy_kwargs=dict(obs_bounds=(low, high)) with finite bounds, or use MlpPolicy"
+            )
+        self.n_types, self.n_params = self.spec.n_types, self.spec.n_params
+        self.approximators = ApproximatorBank(
+            low, high, self.n_types + self.n_params + 1, n_rbf=n_rbf, rbf_width=rbf_width, hidden_units=hidden_units
+        )
+        # Column layout of the bank's outputs.
+        self.q_slice = slice(0, self.n_types)
+        self.param_slice = slice(self.n_types, self.n_types + self.n_params)
+        self.value_index = self.n_types + self.n_params
+        # param_table[u, k, j] = 1 if u == 1 and scalar parameter j belongs to type k (u: "update or not").
+        owns = (self.spec.param_type == np.arange(self.n_types)[:, None]).astype(np.float64)
+        self.param_table = np.stack([np.zeros_like(owns), owns])
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        # Not super()'s: it adds normalize_images, which these policies do not take.
+        return dict(
+            observation_space=self.observation_space,
+            action_space=self.action_space,
+            hidden_units=self.hidden_units,
+            n_rbf=self.n_rbf,
+            rbf_width=self.rbf_width,
+            obs_bounds=self.obs_bounds,
+        )
+
+    def kernel(self) -> BankKernel:
+        """The numpy kernel on the current parameter storage (CPU only); cached by the bank."""
+        return self.approximators.numpy_kernel()
+
+    def rebind(self) -> BankKernel:
+        """Rebuild the numpy views, e.g. after assigning ``param.data`` directly."""
+        self.approximators.invalidate_kernel()
+        return self.approximators.numpy_kernel()
+
+    def forward(self, obs: PyTorchObs) -> th.Tensor:
+        """All approximator outputs ``(n, A)`` in torch (column layout in the class docstring)."""
+        assert isinstance(obs, th.Tensor)
+        return self.approximators(obs.reshape(len(obs), -1))
+
+    def _predict(self, observation: PyTorchObs, deterministic: bool = True) -> th.Tensor:
+        raise NotImplementedError("A parameterized action is not one tensor: use predict()")
+
+    def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache]:
+        """Numpy forward pass on a batch ``(n, *obs_shape)``: outputs ``(n, A)`` and the update cache."""
+        if self.approximators.obs_mid.device.type == "cpu":
+            return self.kernel().forward(obs.reshape(len(obs), -1))
+        with th.no_grad():
+            out = self(th.as_tensor(obs, device=self.device)).cpu().numpy()
+        return out, BankCache(np.empty((len(obs), 0)), None)
+
+    def observation_batch(self, observation: np.ndarray) -> tuple[np.ndarray, bool]:
+        """``observation`` as a float64 batch ``(n, *obs_shape)``, and whether it was a batch already."""
+        obs = np.asarray(observation, dtype=np.float64)
+        shape = self.observation_space.shape
+        if obs.shape == shape:
+            return obs.reshape(1, *shape), False
+        if obs.shape[1:] == shape:
+            return obs, True
+        raise ValueError(
+            f"Error: Unexpected observation shape {obs.shape} for Box environment, "
+            f"please use {shape} or (n_env, {', '.join(map(str, shape))}) for the observation shape."
+        )
+
+    def actions_from_outputs(
+        self, out: np.ndarray, k: np.ndarray | None = None, params: np.ndarray | None = None, vectorized: bool = True
+    ) -> Any:
+        """Env action(s) from outputs ``(n, A)``: greedy unless ``k`` / scaled ``params`` are given."""
+        if k is None:
+            k = out[:, self.q_slice].argmax(1)
+        if params is None:
+            params = out[:, self.param_slice]
+        if vectorized:
+            return self.spec.to_env(k, params)
+        return self.spec.to_env_single(int(k[0]), params[0])
+
+    def predict(  # type: ignore[override]
+        self,
+        observation: np.ndarray,
+        state: tuple[np.ndarray, ...] | None = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = False,
+    ) -> tuple[Any, tuple[np.ndarray, ...] | None]:
+        """
+        Greedy action(s) for one observation or a batch (``deterministic`` is accepted for SB3 compatibility;
+        this policy has no stochastic mode of its own).
+
+        :return: one env action (a tuple ``env.step`` accepts) for a single observation, or an object ndarray of
+            shape ``(n,)`` holding one per observation for a batch; and ``state`` unchanged
+        """
+        obs, vectorized = self.observation_batch(observation)
+        out, _ = self.evaluate(obs)
+        return self.actions_from_outputs(out, vectorized=vectorized), state
+
+
+_PRESET_PARAMS = """
+    :param observation_space: A ``Box`` observation space (see :class:`SarsaAACPolicy`)
+    :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
+    :param hidden_units: Hidden tanh units of each approximator, or ``None`` for linear approximators
+    :param n_rbf: Gaussian RBFs per observation input, or ``None`` to feed the scaled inputs directly
+    :param rbf_width: RBF standard deviation in units of the centre spacing (1.0, chosen by us)
+    :param obs_bounds: ``(low, high)`` for input scaling and RBF placement; defaults to the observation space's
+        bounds
+"""
+
+
+class MlpPolicy(SarsaAACPolicy):
+    __doc__ = (
+        """
+    Multilayer perceptrons (Uc-Cetina 2013, Fig. 5): each approximator has one hidden tanh layer over the scaled
+    observation. The paper tried 2, 10 and 20 hidden units (2 was the most reliable on dribbling); the default 10
+    is ours. Observation inputs with infinite bounds are fed unscaled unless ``obs_bounds`` is given.
+"""
+        + _PRESET_PARAMS
+    )
+
+    def __init__(
+        self,
+        observation_space: spaces.Space,
+        action_space: spaces.Space,
+        hidden_units: int | None = 10,
+        n_rbf: int | None = None,
+        rbf_width: float = 1.0,
+        obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    ):
+        super().__init__(observation_space, action_space, hidden_units, n_rbf, rbf_width, obs_bounds)
+
+
+class RbfMlpPolicy(SarsaAACPolicy):
+    __doc__ = (
+        """
+    Multilayer perceptrons behind a Gaussian RBF filter layer (Uc-Cetina 2013, Fig. 6): each input feeds
+    ``n_rbf`` Gaussians (10 in the paper, the default) and those feed one hidden tanh layer (2, 10 or 20 units in
+    the paper; the default 10 is ours).
+"""
+        + _PRESET_PARAMS
+    )
+
+    def __init__(
+        self,
+        observation_space: spaces.Space,
+        action_space: spaces.Space,
+        hidden_units: int | None = 10,
+        n_rbf: int | None = 10,
+        rbf_width: float = 1.0,
+        obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    ):
+        super().__init__(observation_space, action_space, hidden_units, n_rbf, rbf_width, obs_bounds)
+
+
+class RbfPolicy(SarsaAACPolicy):
+    __doc__ = (
+        """
+    Arrays of Gaussian RBFs with a linear output (Uc-Cetina 2013, Fig. 7), the paper's best family: one array
+    of ``n_rbf`` Gaussians per input (10, 30 or 50 in the paper; default 10) and a linear approximator on top
+    (``hidden_units=None``).
+"""
+        + _PRESET_PARAMS
+    )
+
+    def __init__(
+        self,
+        observation_space: spaces.Space,
+        action_space: spaces.Space,
+        hidden_units: int | None = None,
+        n_rbf: int | None = 10,
+        rbf_width: float = 1.0,
+        obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    ):
+        super().__init__(observation_space, action_space, hidden_units, n_rbf, rbf_width, obs_bounds)

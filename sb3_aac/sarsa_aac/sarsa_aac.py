@@ -1,0 +1,517 @@
+from __future__ import annotations
+
+import sys
+import time
+import zipfile
+from collections import deque
+from typing import Any, ClassVar, TypeVar
+
+import numpy as np
+import torch as th
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.policies import BasePolicy
+from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
+from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
+
+from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy
+
+SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
+
+TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
+# Schedules are re-evaluated whenever training progress has moved by this much (0.1%), not at every step.
+SCHEDULE_RESOLUTION = 1e-3
+
+
+def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator) -> np.ndarray:
+    """
+    Exploratory choice of action types.
+
+    :param q: ``(n, K)`` action-type values
+    :param rate: ``epsilon`` (probability of a uniformly random type) for ``"epsilon_greedy"``, or the softmax
+        temperature (in units of Q) for ``"boltzmann"``; 0 is greedy
+    :param mode: ``"epsilon_greedy"`` or ``"boltzmann"``
+    :param rng: random generator
+    :return: ``(n,)`` chosen types
+    """
+    if rate <= 0:
+        return q.argmax(1)
+    if mode == "epsilon_greedy":
+        k = q.argmax(1)
+        explore = rng.random(len(q)) < rate
+        if explore.any():
+            k[explore] = rng.integers(q.shape[1], size=int(explore.sum()))
+        return k
+    weights = np.exp((q - q.max(1, keepdims=True)) / rate)
+    cumulative = weights.cumsum(1)
+    u = rng.random(len(q)) * cumulative[:, -1]
+    return np.minimum((cumulative < u[:, None]).sum(1), q.shape[1] - 1)
+
+
+class SarsaAAC(BaseAlgorithm):
+    """
+    SARSA Actor-Actor-Critic (SARSA-AAC) for parameterized actions: pick one of K action types, then a real-valued
+    parameter vector for it.
+
+    Paper: V. Uc-Cetina, "A Novel Reinforcement Learning Architecture for Continuous State and Action Spaces",
+    Advances in Artificial Intelligence 2013, https://doi.org/10.1155/2013/492852
+
+    Per environment step ``(s, k, p, r, s', k', p')``, with ``V`` the critic, ``Q_k`` the action-type actor and
+    ``mu`` the parameter actor (all independent function approximators, see :class:`SarsaAACPolicy`):
+
+    - ``delta = r + gamma * V(s') - V(s)``; the critic steps toward ``r + gamma * V(s')``;
+    - SARSA: ``Q_k`` steps toward ``r + gamma * Q_{k'}(s')``, where ``k'`` is the type actually chosen next;
+    - CACLA (van Hasselt & Wiering 2007) on the parameter actor: only if ``delta > 0``, the approximators of
+      type ``k``'s parameters step toward the *executed* parameters ``p`` (in the scaled ``[-1, 1]`` space).
+
+    On a termination the targets are ``r``. On a time-limit truncation (``infos[i]["TimeLimit.truncated"]``) they
+    bootstrap from ``infos[i]["terminal_observation"]``, with ``k'`` drawn there by the exploration policy.
+
+    Exploration (chosen by us; the paper does not describe it, and without it the CACLA update would be a
+    no-op): epsilon-greedy (or Boltzmann) over action types and Gaussian noise of standard deviation
+    ``param_noise`` on the scaled parameters; both decay linearly over the first ``exploration_fraction`` of
+    training. Executed parameters are clipped to the action space's bounds. Schedules (exploration and learning
+    rates) are re-evaluated every 0.1% of training progress rather than at every step.
+
+    Every approximator takes normalised steps (see :mod:`sb3_aac.common.approximators`): a learning rate of 1
+    moves a linear approximator's output onto its target for that sample, so rates lie in ``(0, 1]``.
+    All updates are closed-form numpy on the CPU, vectorised over environments; ``device`` only says where the
+    parameters are stored between ``learn()`` calls. Callbacks run after ``env.step`` and before that step's
+    update.
+
+    The paper gives no numbers for any hyperparameter; every default below was chosen by us.
+
+    :param policy: The policy model to use (MlpPolicy, RbfMlpPolicy, RbfPolicy)
+    :param env: The environment to learn from (if registered in Gym, can be str)
+    :param learning_rate: Critic learning rate (normalised, in ``(0, 1]``), or a schedule of the progress
+        remaining (from 1 to 0)
+    :param q_learning_rate: Action-type actor learning rate, or a schedule
+    :param param_learning_rate: Parameter actor learning rate, or a schedule
+    :param gamma: The discount factor
+    :param type_exploration: ``"epsilon_greedy"``, or ``"boltzmann"`` (softmax over Q with temperature given by
+        the exploration schedule, in units of Q)
+    :param exploration_fraction: Fraction of the training period over which the exploration rate and the
+        parameter noise decay
+    :param exploration_initial_eps: Initial epsilon (or temperature for Boltzmann exploration)
+    :param exploration_final_eps: Final epsilon (or temperature)
+    :param param_noise_initial: Initial standard deviation of the Gaussian noise on the scaled parameters
+    :param param_noise_final: Final standard deviation of the parameter noise
+    :param info_keywords: Keys of ``info`` read at the step where an episode ends and logged as
+        ``rollout/ep_<key>_mean`` (mean over the last ``stats_window_size`` episodes that reported it)
+    :param stats_window_size: Window size for the rollout logging, specifying the number of episodes to average
+        the reported success rate, mean episode length, and mean reward over
+    :param tensorboard_log: the log location for tensorboard (if None, no logging)
+    :param policy_kwargs: additional arguments to be passed to the policy on creation (see :class:`SarsaAACPolicy`)
+    :param verbose: Verbosity level: 0 for no output, 1 for info messages (such as device or wrappers used), 2 for
+        debug messages
+    :param seed: Seed for the pseudo random generators
+    :param device: Device on which the parameters are stored; the computation is numpy on the CPU
+    :param _init_setup_model: Whether or not to build the network at the creation of the instance
+    """
+
+    policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {
+        "MlpPolicy": MlpPolicy,
+        "RbfMlpPolicy": RbfMlpPolicy,
+        "RbfPolicy": RbfPolicy,
+    }
+    policy: SarsaAACPolicy
+
+    def __init__(
+        self,
+        policy: str | type[SarsaAACPolicy],
+        env: GymEnv | str | None,
+        learning_rate: float | Schedule = 0.1,
+        q_learning_rate: float | Schedule = 0.1,
+        param_learning_rate: float | Schedule = 0.1,
+        gamma: float = 0.9,
+        type_exploration: str = "epsilon_greedy",
+        exploration_fraction: float = 0.5,
+        exploration_initial_eps: float = 0.3,
+        exploration_final_eps: float = 0.05,
+        param_noise_initial: float = 0.3,
+        param_noise_final: float = 0.05,
+        info_keywords: tuple[str, ...] = ("distance", "ball_lost"),
+        stats_window_size: int = 100,
+        tensorboard_log: str | None = None,
+        policy_kwargs: dict[str, Any] | None = None,
+        verbose: int = 0,
+        seed: int | None = None,
+        device: th.device | str = "cpu",
+        _init_setup_model: bool = True,
+    ) -> None:
+        super().__init__(
+            policy,
+            env,
+            learning_rate,
+            policy_kwargs=policy_kwargs,
+            stats_window_size=stats_window_size,
+            tensorboard_log=tensorboard_log,
+            verbose=verbose,
+            device=device,
+            support_multi_env=True,
+            seed=seed,
+            # The action space is validated (with a ValueError) when the policy parses it.
+            supported_action_spaces=None,
+        )
+        if not (isinstance(self.policy_class, type) and issubclass(self.policy_class, SarsaAACPolicy)):
+            raise ValueError(
+                f"SarsaAAC needs a SarsaAACPolicy ({', '.join(self.policy_aliases)} or a subclass), got {self.policy_class} "
+                "(loading a model saved by another algorithm?)"
+            )
+        self.q_learning_rate = q_learning_rate
+        self.param_learning_rate = param_learning_rate
+        self.gamma = gamma
+        self.type_exploration = type_exploration
+        self.exploration_fraction = exploration_fraction
+        self.exploration_initial_eps = exploration_initial_eps
+        self.exploration_final_eps = exploration_final_eps
+        self.param_noise_initial = param_noise_initial
+        self.param_noise_final = param_noise_final
+        self.info_keywords = tuple(info_keywords)
+        if _init_setup_model:
+            self._setup_model()
+
+    def _check_hyperparameters(self) -> None:
+        if self.type_exploration not in TYPE_EXPLORATIONS:
+            raise ValueError(f"Unknown type_exploration {self.type_exploration!r}, valid values: {list(TYPE_EXPLORATIONS)}")
+        if not 0 <= self.gamma <= 1:
+            raise ValueError(f"gamma must be in [0, 1], got {self.gamma}")
+        if not 0 < self.exploration_fraction <= 1:
+            raise ValueError(f"exploration_fraction must be in (0, 1], got {self.exploration_fraction}")
+        for name in ("exploration_initial_eps", "exploration_final_eps", "param_noise_initial", "param_noise_final"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+        if self.type_exploration == "epsilon_greedy" and max(self.exploration_initial_eps, self.exploration_final_eps) > 1:
+            raise ValueError("epsilon-greedy exploration rates must be <= 1")
+
+    def _setup_model(self) -> None:
+        self._check_hyperparameters()
+        self._setup_lr_schedule()
+        self.q_lr_schedule = FloatSchedule(self.q_learning_rate)
+        self.param_lr_schedule = FloatSchedule(self.param_learning_rate)
+        fraction = self.exploration_fraction
+        self.exploration_schedule = LinearSchedule(self.exploration_initial_eps, self.exploration_final_eps, fraction)
+        self.param_noise_schedule = LinearSchedule(self.param_noise_initial, self.param_noise_final, fraction)
+        self.exploration_rate = self.exploration_schedule(self._current_progress_remaining)
+        self.param_noise = self.param_noise_schedule(self._current_progress_remaining)
+        self.set_random_seed(self.seed)
+        self.policy = self.policy_class(self.observation_space, self.action_space, **self.policy_kwargs)
+        self.policy = self.policy.to(self.device)
+        # The action a' chosen at _last_obs and not yet executed: (obs (n, D), k (n,), scaled params (n, P)).
+        self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._reset_keyword_buffers()
+        self._reset_train_stats()
+
+    def set_random_seed(self, seed: int | None = None) -> None:
+        """Seed python, numpy, torch, the action space, the env, and the algorithm's own generator."""
+        super().set_random_seed(seed)
+        # All exploration draws come from this generator, not from the global numpy state.
+        self._rng = np.random.default_rng(seed)
+
+    def _excluded_save_params(self) -> list[str]:
+        return [
+            *super()._excluded_save_params(),
+            # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
+            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
+            "_ep_keyword_buffers",
+        ]
+
+    # ------------------------------------------------------------------ acting
+
+    def _explore(self, out: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Exploratory types ``(n,)`` and scaled, clipped parameters ``(n, P)`` from bank outputs ``(n, A)``."""
+        policy = self.policy
+        k = select_types(out[:, policy.q_slice], self.exploration_rate, self.type_exploration, self._rng)
+        params = out[:, policy.param_slice]
+        if self.param_noise > 0:
+            # Not Generator.normal(params, ...): with an array mean it costs several times more.
+            params = params + self.param_noise * self._rng.standard_normal(params.shape)
+        else:
+            params = params.copy()
+        # In place: np.clip costs several times more on small arrays.
+        np.minimum(params, 1.0, out=params)
+        return k, np.maximum(params, -1.0, out=params)
+
+    def predict(  # type: ignore[override]
+        self,
+        observation: np.ndarray,
+        state: tuple[np.ndarray, ...] | None = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = False,
+    ) -> tuple[Any, tuple[np.ndarray, ...] | None]:
+        """
+        Get the action(s) for one observation or a batch.
+
+        :param observation: one observation, or a batch ``(n, *obs_shape)``
+        :param state: unused (no recurrent state), returned as is
+        :param episode_start: unused
+        :param deterministic: greedy action if True, otherwise the current exploration (``exploration_rate``,
+            ``param_noise``) is applied, as during training
+        :return: one env action (a tuple ``env.step`` accepts) for a single observation, or an object ndarray of
+            shape ``(n,)`` of such tuples for a batch; and ``state``
+        """
+        if deterministic:
+            return self.policy.predict(observation, state, episode_start, deterministic=True)
+        obs, vectorized = self.policy.observation_batch(observation)
+        out, _ = self.policy.evaluate(obs)
+        k, params = self._explore(out)
+        return self.policy.actions_from_outputs(out, k, params, vectorized), state
+
+    # ------------------------------------------------------------------ learning
+
+    def learn(
+        self: SelfSarsaAAC,
+        total_timesteps: int,
+        callback: MaybeCallback = None,
+        log_interval: int | None = 4,
+        tb_log_name: str = "SarsaAAC",
+        reset_num_timesteps: bool = True,
+        progress_bar: bool = False,
+    ) -> SelfSarsaAAC:
+        """
+        Return a trained model.
+
+        :param total_timesteps: The total number of samples (env steps) to train on
+        :param callback: callback(s) called at every step with state of the algorithm.
+        :param log_interval: Dump the logs every ``log_interval`` finished episodes (None: never)
+        :param tb_log_name: the name of the run for TensorBoard logging
+        :param reset_num_timesteps: whether or not to reset the current timestep number (used in logging)
+        :param progress_bar: Display a progress bar using tqdm and rich.
+        :return: the trained model
+        """
+        obs_before = self._last_obs
+        total_timesteps, callback = self._setup_learn(
+            total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
+        )
+        if reset_num_timesteps:  # like ep_info_buffer in _setup_learn
+            self._reset_keyword_buffers()
+        callback.on_training_start(locals(), globals())
+        assert self.env is not None
+        env = self.env
+        if self.device.type != "cpu":
+            self.policy.to("cpu")  # the updates are numpy on CPU storage
+        self._kernel = self.policy.rebind()
+        if self._pending is None or self._last_obs is not obs_before:
+            obs = self._last_obs.astype(np.float64).reshape(self.n_envs, -1)  # type: ignore[union-attr]
+            self._pending = (obs, *self._explore(self._kernel.forward(obs)[0]))
+
+        self._update_schedules()
+        callback.on_rollout_start()
+        try:
+            while self.num_timesteps < total_timesteps:
+                _, k, params = self._pending
+                actions = self.policy.spec.to_env(k, params)
+                new_obs, rewards, dones, infos = env.step(actions)
+                self.num_timesteps += env.num_envs
+
+                callback.update_locals(locals())
+                if not callback.on_step():
+                    # The env has moved on without an update: choose afresh at new_obs next time.
+                    self._last_obs, self._last_episode_starts, self._pending = new_obs, dones, None
+                    break
+
+                self._update_info_buffer(infos, dones)
+                self._update_current_progress_remaining(self.num_timesteps, total_timesteps)
+                any_done = dones.any()
+                self._train_step(new_obs, rewards, dones, infos, any_done)
+                self._last_obs, self._last_episode_starts = new_obs, dones
+                if any_done:
+                    self._on_episodes_end(dones, infos, log_interval)
+            self._flush_td_chunks()
+        finally:
+            if self.device.type != "cpu":
+                self.policy.to(self.device)
+        callback.on_rollout_end()
+        callback.on_training_end()
+        return self
+
+    def _update_schedules(self) -> None:
+        """Evaluate the exploration and learning-rate schedules at the current progress."""
+        progress = self._schedule_progress = self._current_progress_remaining
+        self.exploration_rate = self.exploration_schedule(progress)
+        self.param_noise = self.param_noise_schedule(progress)
+        policy, lr = self.policy, self._lr
+        lr[policy.q_slice] = self.q_lr_schedule(progress)
+        lr[policy.param_slice] = self.param_lr_schedule(progress)
+        lr[policy.value_index] = self.lr_schedule(progress)
+
+    def _train_step(
+        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict], any_done: bool
+    ) -> None:
+        """One SARSA-AAC update of every approximator, for all envs at once; then choose the next action."""
+        policy, kernel, gamma = self.policy, self._kernel, self.gamma
+        obs, k, params = self._pending  # type: ignore[misc]
+        n, vi, ps = len(k), policy.value_index, policy.param_slice
+        rows = self._rows if len(self._rows) == n else np.arange(n)
+        if self._current_progress_remaining < self._schedule_progress - SCHEDULE_RESOLUTION:
+            self._update_schedules()
+
+        # An owned float64 copy: kept until the next step (a VecEnv may reuse its buffer) and no mixed dtypes.
+        next_obs = new_obs.astype(np.float64).reshape(n, -1)
+        discount = np.where(dones, 0.0, gamma)
+        # Time-limit truncations bootstrap from the terminal observation (new_obs already holds the reset one).
+        truncated = [i for i in np.flatnonzero(dones) if infos[i].get("TimeLimit.truncated", False)] if any_done else []
+        if truncated:
+            terminal_obs = np.stack([np.ravel(infos[i]["terminal_observation"]) for i in truncated])
+            batch = np.concatenate((obs, next_obs, terminal_obs))
+        else:
+            batch = np.concatenate((obs, next_obs))
+        # One forward pass for s (weights as they are now), s' and the terminal observations.
+        out, cache = kernel.forward(batch)
+        current, following = out[:n], out[n : 2 * n]
+        next_k, next_params = self._explore(following)
+        v_next = following[:, vi]
+        q_next = following[rows, next_k]
+        if truncated:
+            terminal = out[2 * n :]
+            v_next[truncated] = terminal[:, vi]
+            q_next[truncated] = terminal[np.arange(len(truncated)), self._explore(terminal)[0]]
+            discount[truncated] = gamma
+
+        rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
+        delta = rewards + discount * v_next - current[:, vi]
+        q_error = rewards + discount * q_next - current[rows, k]
+        err = np.zeros_like(current)
+        err[rows, k] = q_error
+        # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0.
+        err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
+        err[:, vi] = delta
+        kernel.update(cache, err, self._lr)
+        self._n_updates += 1
+
+        self._pending = (next_obs, next_k, next_params)
+        self._td_chunks.append((delta, q_error, k))
+        if len(self._td_chunks) >= 256:
+            self._flush_td_chunks()
+
+    # ------------------------------------------------------------------ statistics and logging
+
+    def _reset_keyword_buffers(self) -> None:
+        """Windows of the ``info_keywords`` values of finished episodes (like ``ep_info_buffer``)."""
+        self._ep_keyword_buffers = {key: deque(maxlen=self._stats_window_size) for key in self.info_keywords}
+
+    def _reset_train_stats(self) -> None:
+        n_types = self.policy.n_types
+        self._lr = np.zeros(self.policy.value_index + 1)
+        self._rows = np.arange(self.n_envs)
+        self._td_chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        # Sums since the last dump: n, delta, |delta|, delta^2, q_error^2, count(delta > 0); type counts.
+        self._train_stats = np.zeros(6)
+        self._type_counts = np.zeros(n_types, dtype=np.int64)
+
+    def _flush_td_chunks(self) -> None:
+        """Fold the per-step TD errors into the running sums, and stop on divergence."""
+        if not self._td_chunks:
+            return
+        delta, q_error, k = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
+        self._td_chunks.clear()
+        sums = np.array([len(delta), delta.sum(), np.abs(delta).sum(), delta @ delta, q_error @ q_error, (delta > 0).sum()])
+        self._check_weights()  # names the approximators that diverged
+        if not np.isfinite(sums[1:4]).all():
+            self._raise_divergence("the critic's TD error (delta)")
+        if not np.isfinite(sums[4]):
+            self._raise_divergence("the action-type actor's SARSA error")
+        self._train_stats += sums
+        self._type_counts += np.bincount(k, minlength=len(self._type_counts))
+
+    def _check_weights(self) -> None:
+        arrays = [p.detach().cpu().numpy() for p in self.policy.approximators.parameters()]
+        n_outputs = self.policy.value_index + 1
+        finite = np.ones(n_outputs, dtype=bool)
+        for array in arrays:
+            finite &= np.isfinite(array.reshape(n_outputs, -1)).all(1)
+        if not finite.all():
+            policy = self.policy
+            names = []
+            if not finite[policy.q_slice].all():
+                names.append(f"the action-type actor (Q of types {np.flatnonzero(~finite[policy.q_slice]).tolist()})")
+            if not finite[policy.param_slice].all():
+                names.append(f"the parameter actor (parameters {np.flatnonzero(~finite[policy.param_slice]).tolist()})")
+            if not finite[policy.value_index]:
+                names.append("the critic")
+            self._raise_divergence("the weights of " + " and ".join(names))
+
+    def _raise_divergence(self, what: str) -> None:
+        raise FloatingPointError(
+            f"SarsaAAC diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}. "
+            f"Lower the learning rates (learning_rate={self.learning_rate}, q_learning_rate={self.q_learning_rate}, "
+            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in (0, 1]), lower gamma, "
+            "or rescale the rewards; also check that the env returns finite rewards and observations."
+        )
+
+    def _on_episodes_end(self, dones: np.ndarray, infos: list[dict], log_interval: int | None) -> None:
+        for i in np.flatnonzero(dones):
+            for key, buffer in self._ep_keyword_buffers.items():
+                if key in infos[i]:
+                    buffer.append(float(infos[i][key]))
+        episodes_before = self._episode_num
+        self._episode_num += int(dones.sum())
+        if log_interval is not None and self._episode_num // log_interval > episodes_before // log_interval:
+            self.dump_logs()
+
+    def dump_logs(self) -> None:
+        """Write log data (``rollout/``, ``time/`` and ``train/`` keys), then reset the ``train/`` statistics."""
+        assert self.ep_info_buffer is not None
+        assert self.ep_success_buffer is not None
+        self._flush_td_chunks()
+        time_elapsed = max((time.time_ns() - self.start_time) / 1e9, sys.float_info.epsilon)
+        fps = int((self.num_timesteps - self._num_timesteps_at_start) / time_elapsed)
+        record = self.logger.record
+        record("time/episodes", self._episode_num, exclude="tensorboard")
+        if len(self.ep_info_buffer) > 0 and len(self.ep_info_buffer[0]) > 0:
+            record("rollout/ep_rew_mean", safe_mean([ep_info["r"] for ep_info in self.ep_info_buffer]))
+            record("rollout/ep_len_mean", safe_mean([ep_info["l"] for ep_info in self.ep_info_buffer]))
+        for key, buffer in self._ep_keyword_buffers.items():
+            if buffer:
+                record(f"rollout/ep_{key}_mean", safe_mean(list(buffer)))
+        if len(self.ep_success_buffer) > 0:
+            record("rollout/success_rate", safe_mean(self.ep_success_buffer))
+        record("rollout/exploration_rate", self.exploration_rate)
+        n, delta_sum, delta_abs, delta_sq, q_sq, improved = self._train_stats
+        if n > 0:
+            for k, count in enumerate(self._type_counts):
+                record(f"rollout/type_freq_{k}", count / n)
+            record("train/td_error_mean", delta_sum / n)
+            record("train/td_error_abs_mean", delta_abs / n)
+            record("train/critic_loss", delta_sq / n)
+            record("train/q_loss", q_sq / n)
+            record("train/param_update_fraction", improved / n)
+        progress = self._current_progress_remaining
+        record("train/param_noise", self.param_noise)
+        record("train/learning_rate", self.lr_schedule(progress))
+        record("train/q_learning_rate", self.q_lr_schedule(progress))
+        record("train/param_learning_rate", self.param_lr_schedule(progress))
+        record("train/n_updates", self._n_updates, exclude="tensorboard")
+        record("time/fps", fps)
+        record("time/time_elapsed", int(time_elapsed), exclude="tensorboard")
+        record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
+        self.logger.dump(step=self.num_timesteps)
+        self._train_stats[:] = 0
+        self._type_counts[:] = 0
+
+    # ------------------------------------------------------------------ persistence
+
+    @classmethod
+    def load(  # type: ignore[override]
+        cls: type[SelfSarsaAAC],
+        path: Any,
+        env: GymEnv | None = None,
+        device: th.device | str = "cpu",
+        custom_objects: dict[str, Any] | None = None,
+        print_system_info: bool = False,
+        force_reset: bool = True,
+        **kwargs: Any,
+    ) -> SelfSarsaAAC:
+        """
+        Load the model from a zip-file (see :meth:`BaseAlgorithm.load`).
+
+        :raises ValueError: if the file is not a complete SarsaAAC model (corrupted, truncated, or another
+            algorithm's), or if ``env`` does not match the model's spaces
+        """
+        try:
+            return super().load(path, env, device, custom_objects, print_system_info, force_reset, **kwargs)
+        except (zipfile.BadZipFile, EOFError, AssertionError, KeyError, RuntimeError, OSError) as e:
+            if isinstance(e, FileNotFoundError):
+                raise
+            raise ValueError(
+                f"{path} is not a complete SarsaAAC model (corrupted, truncated, or saved by another algorithm): {e!r}"
+            ) from e

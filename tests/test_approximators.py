@@ -1,0 +1,139 @@
+import copy
+
+import numpy as np
+import pytest
+import torch as th
+
+from sb3_aac.common.approximators import ApproximatorBank, rbf_layout
+
+CONFIGS = {
+    "mlp": dict(n_rbf=None, hidden_units=5),
+    "rbf_mlp": dict(n_rbf=4, hidden_units=5),
+    "rbf": dict(n_rbf=4, hidden_units=None),
+    "linear": dict(n_rbf=None, hidden_units=None),
+}
+LOW, HIGH = np.array([-1.0, 0.0, -5.0]), np.array([1.0, 2.0, 5.0])
+
+
+def make_bank(name: str, n_outputs: int = 4) -> ApproximatorBank:
+    th.manual_seed(0)
+    return ApproximatorBank(LOW, HIGH, n_outputs, **CONFIGS[name])
+
+
+@pytest.mark.parametrize("name", CONFIGS)
+def test_numpy_kernel_matches_torch(name):
+    bank = make_bank(name)
+    obs = np.random.default_rng(0).uniform(LOW, HIGH, (7, 3))
+    out, _ = bank.numpy_kernel().forward(obs)
+    np.testing.assert_allclose(out, bank(th.as_tensor(obs)).numpy(), rtol=1e-12, atol=1e-12)
+    assert out.shape == (7, 4)
+
+
+@pytest.mark.parametrize("name", CONFIGS)
+def test_update_equals_normalised_gradient_step(name):
+    """The closed-form update is a gradient step on 0.5 * err^2, each layer's step divided by 1 + ||its input||^2."""
+    bank = make_bank(name)
+    obs = np.random.default_rng(1).uniform(LOW, HIGH, (1, 3))
+    kernel = bank.numpy_kernel()
+    out, cache = kernel.forward(obs)
+    err = np.array([[0.5, 0.0, -1.0, 2.0]])
+    lr = np.array([0.1, 0.2, 0.3, 0.4])
+
+    reference = copy.deepcopy(bank)
+    params = {name: p.requires_grad_(True) for name, p in reference.named_parameters()}
+    output = reference(th.as_tensor(obs))
+    # d/dw of sum(lr * err * output) is the descent direction for 0.5 * err^2 with err held fixed.
+    (output * th.as_tensor(lr * err)).sum().backward()
+    expected = {}
+    with th.no_grad():
+        x = reference.features(th.as_tensor(obs))
+        x_scale = 1.0 / (1.0 + (x * x).sum())
+    for pname, p in params.items():
+        if pname in ("weight2", "bias2"):
+            with th.no_grad():
+                hidden = th.tanh(th.einsum("nf,ahf->nah", x, reference.weight1) + reference.bias1)
+            scale = 1.0 / (1.0 + (hidden[0] ** 2).sum(-1))  # per approximator
+            scale = scale[:, None] if pname == "weight2" else scale
+            expected[pname] = p.detach() + p.grad * scale
+        else:
+            expected[pname] = p.detach() + p.grad * x_scale
+    kernel.update(cache, err, lr)
+    for pname, p in bank.named_parameters():
+        np.testing.assert_allclose(p.numpy(), expected[pname].numpy(), rtol=1e-10, atol=1e-12, err_msg=pname)
+
+
+def test_linear_rate_one_hits_target():
+    """Normalised LMS: with a learning rate of 1 a linear approximator reaches its target on that sample."""
+    for n_rbf in (10, 30, 50):
+        bank = ApproximatorBank(LOW, HIGH, 2, n_rbf=n_rbf)
+        kernel = bank.numpy_kernel()
+        obs = np.array([[0.3, 1.2, -2.0]])
+        out, cache = kernel.forward(obs)
+        target = out + np.array([[1.0, -3.0]])
+        kernel.update(cache, target - out, np.ones(2))
+        np.testing.assert_allclose(kernel.forward(obs)[0], target, atol=1e-12)
+
+
+def test_zero_error_changes_nothing_and_outputs_are_independent():
+    bank = make_bank("rbf_mlp")
+    kernel = bank.numpy_kernel()
+    before = {k: v.clone() for k, v in bank.state_dict().items()}
+    obs = np.zeros((2, 3))
+    out, cache = kernel.forward(obs)
+    err = np.zeros((2, 4))
+    err[:, 1] = 1.0
+    kernel.update(cache, err, np.ones(4))
+    after = bank.state_dict()
+    for key in ("weight1", "bias1", "weight2", "bias2"):
+        changed = ~np.isclose(after[key].numpy(), before[key].numpy()).reshape(4, -1).all(1)
+        np.testing.assert_array_equal(changed, [False, True, False, False], err_msg=key)
+
+
+def test_rbf_layout_and_features():
+    centers, widths = rbf_layout(2, 5, 1.0)
+    np.testing.assert_allclose(centers[0], [-1, -0.5, 0, 0.5, 1])
+    np.testing.assert_allclose(widths, 0.5)
+    bank = ApproximatorBank(np.array([0.0, 10.0]), np.array([4.0, 20.0]), 1, n_rbf=5)
+    # The low bound of each input sits on its first centre, the high bound on its last.
+    x = bank.numpy_kernel().features(np.array([[0.0, 20.0]]))
+    assert x.shape == (1, 10)
+    assert x[0, 0] == pytest.approx(1.0) and x[0, 9] == pytest.approx(1.0)
+    assert x[0, 1] == pytest.approx(np.exp(-0.5))
+
+
+def test_kernel_views_follow_load_state_dict_and_moves():
+    bank = make_bank("rbf")
+    kernel = bank.numpy_kernel()
+    assert bank.numpy_kernel() is kernel  # cached
+    obs = np.zeros((1, 3))
+    other = make_bank("rbf")
+    with th.no_grad():
+        other.weight.add_(1.0)
+        other.rbf_widths.mul_(2.0)
+    bank.load_state_dict(other.state_dict())
+    np.testing.assert_allclose(bank.numpy_kernel().forward(obs)[0], other(th.as_tensor(obs)).numpy())
+    bank.to(th.float64)
+    assert bank.numpy_kernel() is not kernel
+    clone = copy.deepcopy(bank)
+    clone.numpy_kernel().update(clone.numpy_kernel().forward(obs)[1], np.ones((1, 4)), np.ones(4))
+    assert not np.allclose(clone.weight.numpy(), bank.weight.numpy())
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(low=np.array([-np.inf, 0]), high=np.array([1, 1]), n_rbf=5), "RBF features need finite bounds"),
+        (dict(low=np.array([1, 0]), high=np.array([1, 1])), "Need low < high"),
+        (dict(low=np.zeros(2), high=np.ones(2), hidden_units=0), "hidden_units must be >= 1"),
+        (dict(low=np.zeros(2), high=np.ones(2), n_rbf=0), "n_rbf must be >= 1"),
+        (dict(low=np.zeros(2), high=np.ones(2), n_rbf=3, rbf_width=0.0), "rbf_width must be > 0"),
+    ],
+)
+def test_bad_arguments(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        ApproximatorBank(n_outputs=2, **kwargs)
+
+
+def test_infinite_bounds_without_rbf_pass_inputs_unscaled():
+    bank = ApproximatorBank(np.array([-np.inf, 0.0]), np.array([np.inf, 2.0]), 1)
+    np.testing.assert_allclose(bank.numpy_kernel().features(np.array([[7.0, 2.0]])), [[7.0, 1.0]])

@@ -1,0 +1,158 @@
+import os
+
+import numpy as np
+import pytest
+import torch as th
+from stable_baselines3.common.callbacks import (
+    BaseCallback,
+    CallbackList,
+    CheckpointCallback,
+    EvalCallback,
+    EveryNTimesteps,
+    LogEveryNTimesteps,
+    StopTrainingOnMaxEpisodes,
+    StopTrainingOnNoModelImprovement,
+    StopTrainingOnRewardThreshold,
+)
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.evaluation import evaluate_policy
+from stable_baselines3.common.logger import configure
+
+from sb3_aac import SarsaAAC
+from sb3_aac.common.envs import ParameterizedTargetEnv
+from tests.helpers import POLICIES
+
+
+class Counter(BaseCallback):
+    def _on_step(self) -> bool:
+        return True
+
+
+class LocalsCheck(BaseCallback):
+    def _on_step(self) -> bool:
+        for name in ("new_obs", "rewards", "dones", "infos", "actions"):
+            assert name in self.locals, name
+        assert self.locals["new_obs"].shape == (self.training_env.num_envs, 2)
+        assert self.locals["actions"].dtype == object
+        return True
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+def test_callbacks(tmp_path, policy):
+    log_folder = tmp_path / "logs"
+    model = SarsaAAC(policy, ParameterizedTargetEnv(), seed=0)
+    checkpoint = CheckpointCallback(save_freq=100, save_path=str(log_folder), name_prefix="sarsa")
+    eval_env = make_vec_env(ParameterizedTargetEnv, n_envs=1, seed=1)
+    # Stop as soon as the mean reward beats -inf: proves the threshold callback ends training.
+    stop_threshold = StopTrainingOnRewardThreshold(reward_threshold=-np.inf, verbose=1)
+    eval_callback = EvalCallback(
+        eval_env, callback_on_new_best=stop_threshold, best_model_save_path=str(log_folder), eval_freq=100, n_eval_episodes=2
+    )
+    event_counter = Counter()
+    event_callback = EveryNTimesteps(n_steps=50, callback=event_counter)
+    log_callback = LogEveryNTimesteps(n_steps=50)
+
+    model.learn(500, callback=CallbackList([checkpoint, eval_callback, event_callback, log_callback, LocalsCheck()]))
+    # Stopped by the reward threshold at the first evaluation (step 100), not at 500.
+    assert model.num_timesteps == 100
+    assert os.path.exists(log_folder / "sarsa_100_steps.zip")
+    assert os.path.exists(log_folder / "best_model.zip")
+    assert event_counter.n_calls == 2  # at 50 and 100
+    # The evaluation runs after env.step and before that step's update, and stopping skips the update,
+    # so the saved best model is exactly the final one and evaluates to the same mean reward.
+    best = SarsaAAC.load(log_folder / "best_model.zip")
+    for key, value in best.get_parameters()["policy"].items():
+        assert th.equal(value, model.get_parameters()["policy"][key]), key
+    eval_env.seed(1)
+    assert evaluate_policy(best, eval_env, n_eval_episodes=2)[0] == pytest.approx(eval_callback.last_mean_reward)
+
+
+def test_no_model_improvement_and_max_episodes():
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
+    stop = StopTrainingOnNoModelImprovement(max_no_improvement_evals=1, min_evals=1)
+    eval_callback = EvalCallback(make_vec_env(ParameterizedTargetEnv, n_envs=1), eval_freq=50, callback_after_eval=stop)
+    model.learn(100_000, callback=eval_callback)
+    assert model.num_timesteps < 100_000
+
+    model = SarsaAAC("RbfPolicy", make_vec_env(ParameterizedTargetEnv, n_envs=2, seed=0), seed=0)
+    model.learn(100_000, callback=StopTrainingOnMaxEpisodes(max_episodes=5))
+    assert model.num_timesteps < 100_000
+    assert model._episode_num >= 5
+
+
+def test_function_callback_and_n_calls():
+    calls = []
+
+    def callback(_locals, _globals):
+        calls.append(_locals["self"].num_timesteps)
+        return len(calls) < 30
+
+    model = SarsaAAC("RbfPolicy", make_vec_env(ParameterizedTargetEnv, n_envs=2, seed=0), seed=0)
+    model.learn(1000, callback=callback)
+    assert calls == list(range(2, 62, 2))
+    counter = Counter()
+    model.learn(100, callback=counter)
+    assert counter.n_calls * 2 == model.num_timesteps == 100
+
+
+def test_progress_bar():
+    SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0).learn(100, progress_bar=True)
+
+
+def test_dump_logs_keys(tmp_path):
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
+    model.set_logger(configure(str(tmp_path), ["csv"]))
+    model.learn(400, log_interval=5)
+    model.dump_logs()  # no arguments, as LogEveryNTimesteps calls it
+    rows = (tmp_path / "progress.csv").read_text().splitlines()
+    header = rows[0].split(",")
+    for key in (
+        "rollout/ep_rew_mean",
+        "rollout/ep_len_mean",
+        "rollout/exploration_rate",
+        "rollout/ep_distance_mean",
+        "rollout/ep_ball_lost_mean",
+        "rollout/type_freq_0",
+        "rollout/type_freq_2",
+        "train/td_error_mean",
+        "train/td_error_abs_mean",
+        "train/critic_loss",
+        "train/q_loss",
+        "train/param_update_fraction",
+        "train/param_noise",
+        "train/learning_rate",
+        "train/q_learning_rate",
+        "train/param_learning_rate",
+        "time/fps",
+        "time/total_timesteps",
+        "time/episodes",
+    ):
+        assert key in header, key
+    first = dict(zip(header, rows[1].split(","), strict=True))
+    freqs = [float(first[f"rollout/type_freq_{k}"]) for k in range(3)]
+    assert sum(freqs) == pytest.approx(1.0)
+    assert 0.0 <= float(first["train/param_update_fraction"]) <= 1.0
+    assert 0.0 <= float(first["rollout/ep_ball_lost_mean"]) <= 1.0
+
+
+def test_log_interval_none_never_dumps(tmp_path):
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
+    model.set_logger(configure(str(tmp_path), ["csv"]))
+    model.learn(300, log_interval=None)
+    assert (tmp_path / "progress.csv").read_text() == ""
+
+
+def test_stopping_keeps_the_latest_observation():
+    """A callback that stops training skips that step's update; the next learn() continues from new_obs."""
+    seen = {}
+
+    def stop_at_three(_locals, _globals):
+        seen["new_obs"] = _locals["new_obs"]
+        return _locals["self"].num_timesteps < 3
+
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
+    model.learn(100, callback=stop_at_three)
+    assert model.num_timesteps == 3 and model._n_updates == 2
+    assert model._last_obs is seen["new_obs"]
+    model.learn(10, reset_num_timesteps=False)
+    assert model.num_timesteps == 13 and model._n_updates == 12

@@ -1,0 +1,206 @@
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium import spaces
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.evaluation import evaluate_policy
+from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+from sb3_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC
+from sb3_aac.common.envs import ParameterizedTargetEnv
+from sb3_aac.sarsa_aac.sarsa_aac import select_types
+from tests.helpers import LAYOUTS, POLICIES, OneStepEnv
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_run(policy, layout):
+    env = ParameterizedTargetEnv(layout)
+    model = SarsaAAC(policy, env, seed=0)
+    model.learn(total_timesteps=300)
+    assert model.num_timesteps == 300
+    obs, _ = env.reset(seed=1)
+    for deterministic in (True, False):
+        action, state = model.predict(obs, deterministic=deterministic)
+        assert state is None
+        assert isinstance(action, tuple) and env.action_space.contains(action)
+        env.step(action)
+    mean_reward, _ = evaluate_policy(model, model.get_env(), n_eval_episodes=2)
+    assert np.isfinite(mean_reward)
+
+
+def test_policy_aliases_and_classes():
+    assert SarsaAAC.policy_aliases == {"MlpPolicy": MlpPolicy, "RbfMlpPolicy": RbfMlpPolicy, "RbfPolicy": RbfPolicy}
+    model = SarsaAAC(RbfPolicy, ParameterizedTargetEnv(), seed=0)
+    assert isinstance(model.policy, RbfPolicy)
+    with pytest.raises(ValueError, match="Policy CnnPolicy unknown"):
+        SarsaAAC("CnnPolicy", ParameterizedTargetEnv())
+
+
+@pytest.mark.parametrize(
+    "policy, policy_kwargs, n_features, hidden",
+    [
+        ("MlpPolicy", dict(hidden_units=2), 2, 2),
+        ("MlpPolicy", dict(hidden_units=20), 2, 20),
+        ("RbfMlpPolicy", dict(hidden_units=2, n_rbf=5), 10, 2),
+        ("RbfPolicy", dict(n_rbf=30), 60, None),
+        ("RbfPolicy", dict(n_rbf=50, rbf_width=0.5, obs_bounds=([-2, -2], [2, 2])), 100, None),
+    ],
+)
+def test_policy_kwargs(policy, policy_kwargs, n_features, hidden):
+    model = SarsaAAC(policy, ParameterizedTargetEnv(), policy_kwargs=policy_kwargs, seed=0)
+    bank = model.policy.approximators
+    assert bank.n_features == n_features and bank.hidden_units == hidden
+    # K=3 Q approximators, 1 + 2 + 2 parameter approximators, 1 critic.
+    assert bank.n_outputs == 3 + 5 + 1
+    model.learn(200)
+
+
+def test_stats_window_size():
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), stats_window_size=42, seed=0)
+    model.learn(100)
+    assert model.ep_info_buffer.maxlen == 42
+    assert model._ep_keyword_buffers["distance"].maxlen == 42
+
+
+@pytest.mark.parametrize("vec_env_class", [DummyVecEnv, SubprocVecEnv])
+def test_multi_env(vec_env_class):
+    env = make_vec_env(ParameterizedTargetEnv, n_envs=2, seed=0, vec_env_cls=vec_env_class)
+    model = SarsaAAC("RbfPolicy", env, seed=0)
+    model.learn(400)
+    assert model.num_timesteps == 400
+    actions, _ = model.predict(env.reset(), deterministic=True)
+    assert actions.dtype == object and actions.shape == (2,)
+    env.close()
+
+
+def test_boltzmann_exploration():
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), type_exploration="boltzmann", exploration_initial_eps=1.0, seed=0)
+    model.learn(300)
+    assert model.exploration_rate == pytest.approx(0.05)
+
+
+@pytest.mark.parametrize(
+    "mode, rate, expected",
+    [
+        ("boltzmann", 1.0, [0.25, 0.5, 0.25]),  # softmax of [0, log 2, 0]
+        ("boltzmann", 0.0, [0.0, 1.0, 0.0]),
+        ("epsilon_greedy", 0.3, [0.1, 0.8, 0.1]),
+        ("epsilon_greedy", 0.0, [0.0, 1.0, 0.0]),
+    ],
+)
+def test_select_types_distribution(mode, rate, expected):
+    q = np.tile([0.0, np.log(2.0), 0.0], (40_000, 1))
+    k = select_types(q, rate, mode, np.random.default_rng(0))
+    np.testing.assert_allclose(np.bincount(k, minlength=3) / len(k), expected, atol=0.01)
+
+
+def test_exploration_schedules():
+    model = SarsaAAC(
+        "RbfPolicy",
+        ParameterizedTargetEnv(),
+        exploration_fraction=0.5,
+        exploration_initial_eps=0.8,
+        exploration_final_eps=0.1,
+        param_noise_initial=0.4,
+        param_noise_final=0.0,
+        seed=0,
+    )
+    model.learn(1000)
+    assert model.exploration_rate == pytest.approx(0.1)
+    assert model.param_noise == pytest.approx(0.0)
+    # With no noise and epsilon 0, non-deterministic predict is the greedy action.
+    model.exploration_rate = 0.0
+    obs = np.array([0.3, -0.2], np.float32)
+    greedy, _ = model.predict(obs, deterministic=True)
+    explored, _ = model.predict(obs, deterministic=False)
+    assert greedy[0] == explored[0]
+    for a, b in zip(greedy[1], explored[1], strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_predict_explores_when_not_deterministic():
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), exploration_initial_eps=1.0, seed=0)
+    obs = np.array([0.3, -0.2], np.float32)
+    assert len({model.predict(obs, deterministic=True)[0][0] for _ in range(20)}) == 1
+    assert len({model.predict(obs, deterministic=False)[0][0] for _ in range(50)}) == 3
+    params = {model.predict(obs, deterministic=False)[0][1][2][0] for _ in range(20)}
+    assert len(params) > 1  # Gaussian parameter noise
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(type_exploration="softmax"), "Unknown type_exploration 'softmax'"),
+        (dict(gamma=1.5), "gamma must be in"),
+        (dict(exploration_fraction=0.0), "exploration_fraction must be in"),
+        (dict(param_noise_initial=-0.1), "param_noise_initial must be >= 0"),
+        (dict(exploration_initial_eps=2.0), "epsilon-greedy exploration rates must be <= 1"),
+    ],
+)
+def test_bad_hyperparameters(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), **kwargs)
+
+
+class BoxActionEnv(gym.Env):
+    observation_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+    action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+
+
+class DictObsEnv(gym.Env):
+    observation_space = spaces.Dict({"a": spaces.Box(-1.0, 1.0, (2,), np.float32)})
+    action_space = ParameterizedTargetEnv().action_space
+
+
+class InfiniteObsEnv(ParameterizedTargetEnv):
+    def __init__(self):
+        super().__init__()
+        self.observation_space = spaces.Box(-np.inf, np.inf, (2,), np.float32)
+
+
+@pytest.mark.parametrize(
+    "policy, env, message",
+    [
+        ("RbfPolicy", BoxActionEnv(), r"Unsupported parameterized action space Box\(-1.0, 1.0, \(3,\), float32\)"),
+        ("RbfPolicy", DictObsEnv(), "Unsupported observation space Dict"),
+        ("RbfPolicy", InfiniteObsEnv(), "infinite bounds, so RBF centres cannot be placed"),
+        ("RbfMlpPolicy", InfiniteObsEnv(), "infinite bounds, so RBF centres cannot be placed"),
+    ],
+)
+def test_unsupported_envs(policy, env, message):
+    with pytest.raises(ValueError, match=message):
+        SarsaAAC(policy, env)
+
+
+def test_infinite_obs_bounds_mlp_and_rbf_with_bounds():
+    SarsaAAC("MlpPolicy", InfiniteObsEnv(), seed=0).learn(100)
+    model = SarsaAAC("RbfPolicy", InfiniteObsEnv(), policy_kwargs=dict(obs_bounds=([-1, -1], [1, 1])), seed=0)
+    model.learn(100)
+
+
+def values(model, obs):
+    out, _ = model.policy.evaluate(np.array(obs, np.float64).reshape(-1, 1))
+    return out[:, model.policy.q_slice], out[:, model.policy.value_index]
+
+
+def test_termination_does_not_bootstrap_truncation_does():
+    """With reward 1 per one-step episode and gamma=0.5: V = Q = 1 on termination, 1 / (1 - 0.5) = 2 on a time limit."""
+    env = DummyVecEnv([lambda: OneStepEnv(truncate=False, obs=-0.5), lambda: OneStepEnv(truncate=True, obs=0.5)])
+    model = SarsaAAC("RbfPolicy", env, gamma=0.5, learning_rate=0.5, q_learning_rate=0.5, exploration_initial_eps=0.5, seed=0)
+    model.learn(4000)
+    q, v = values(model, [-0.5, 0.5])
+    np.testing.assert_allclose(v, [1.0, 2.0], atol=0.05)
+    np.testing.assert_allclose(q, [[1.0, 1.0], [2.0, 2.0]], atol=0.05)
+
+
+def test_divergence_raises_clear_error():
+    model = SarsaAAC("RbfPolicy", OneStepEnv(truncate=False), learning_rate=50.0, seed=0)
+    with pytest.raises(FloatingPointError, match=r"SarsaAAC diverged: .*critic.* became non-finite .* Lower the learning"):
+        model.learn(2000)
+
+
+def test_non_finite_reward_raises():
+    model = SarsaAAC("RbfPolicy", OneStepEnv(truncate=False, reward=np.nan), seed=0)
+    with pytest.raises(FloatingPointError, match="check that the env returns finite rewards"):
+        model.learn(100)
