@@ -3,8 +3,18 @@
 import os
 
 from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy
+from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction
 
 with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handler:
     __version__ = file_handler.read().strip()
 
-__all__ = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "SarsaAAC", "SarsaAACPolicy", "__version__"]
+__all__ = [
+    "DiscretizeParameterizedAction",
+    "FlattenParameterizedAction",
+    "MlpPolicy",
+    "RbfMlpPolicy",
+    "RbfPolicy",
+    "SarsaAAC",
+    "SarsaAACPolicy",
+    "__version__",
+]
