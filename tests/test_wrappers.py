@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import torch as th
 from gymnasium import spaces
-from helpers import LAYOUTS
+from tests.helpers import LAYOUTS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from stable_baselines3 import A2C, DDPG, DQN, PPO, SAC, TD3
