@@ -2,9 +2,20 @@
 
 import os
 
+from sb3_aac.export import export_policy
+from sb3_aac.runtime import RuntimePolicy
 from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy
 
 with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handler:
     __version__ = file_handler.read().strip()
 
-__all__ = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "SarsaAAC", "SarsaAACPolicy", "__version__"]
+__all__ = [
+    "MlpPolicy",
+    "RbfMlpPolicy",
+    "RbfPolicy",
+    "RuntimePolicy",
+    "SarsaAAC",
+    "SarsaAACPolicy",
+    "__version__",
+    "export_policy",
+]
