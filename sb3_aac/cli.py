@@ -502,6 +502,8 @@ def cmd_bench(args: argparse.Namespace) -> None:
         [str(scripts[0]), "--seconds", str(args.seconds)],
         [str(scripts[1]), *([] if args.full else ["--quick"])],
     ]
+    if args.only is not None:
+        runs = [runs[("env", "runtime").index(args.only)]]
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(root), str(root / "envs"), env.get("PYTHONPATH")]))
     for run in runs:
@@ -607,6 +609,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     bench = add("bench", "quick speed benchmarks: env steps/s and us per decision of an exported policy", "sb3-aac bench")
     bench.add_argument("--seconds", type=positive_float, default=0.3, help="env benchmark budget per figure (default: %(default)s)")
+    bench.add_argument("--only", choices=("env", "runtime"), help="run one of the two benchmarks")
     bench.add_argument("--full", action="store_true", help="the full runtime benchmark (all policies and sizes; a minute)")
     bench.set_defaults(func=cmd_bench)
     return parser
