@@ -5,11 +5,14 @@ import os
 from sb3_aac.export import export_policy
 from sb3_aac.runtime import RuntimePolicy
 from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy
+from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction
 
 with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handler:
     __version__ = file_handler.read().strip()
 
 __all__ = [
+    "DiscretizeParameterizedAction",
+    "FlattenParameterizedAction",
     "MlpPolicy",
     "RbfMlpPolicy",
     "RbfPolicy",

@@ -270,3 +270,16 @@ def test_invariants_under_random_and_extreme_actions(seed, kinds, params, profil
         gap = np.hypot(state[physics.B_X] - state[physics.P_X], state[physics.B_Y] - state[physics.P_Y])
         assert gap >= t[physics.T_SIZE] + s.ball_size - 1e-9, "collisions are resolved"
         assert np.isfinite(infos[0]["distance"])
+
+
+def test_sb3_evaluate_policy_reads_the_vec_envs_episode_statistics():
+    from stable_baselines3.common.evaluation import evaluate_policy
+
+    class Dash:
+        def predict(self, obs, state=None, episode_start=None, deterministic=True):
+            return skills.as_env_actions(np.zeros(len(obs), dtype=int), np.zeros((len(obs), 7))), None
+
+    vec = DribbleVecEnv(4, max_actions=3)
+    vec.seed(0)
+    rewards, lengths = evaluate_policy(Dash(), vec, n_eval_episodes=8, return_episode_rewards=True, warn=True)
+    assert len(rewards) == 8 and all(1 <= length <= 3 for length in lengths)

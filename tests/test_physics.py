@@ -187,7 +187,7 @@ def test_t16_v11_backward_dash_costs_double():
 
 def test_v11_effort_bug_raises_effort_from_the_decrease_threshold():
     profile = V11
-    weak = dataclasses.replace(default_player_type(profile), effort_max=1.0)
+    weak = default_player_type(profile)._replace(effort_max=1.0)
     types = stack_player_types([weak])
     state = physics.new_state(1)
     physics.recover(state, types, profile)

@@ -12,7 +12,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import robocup_dribble.player_types as pt
 from robocup_dribble.params import EPS, make_profile
 from robocup_dribble.player_types import (
     TYPE_FIELDS,
@@ -61,7 +60,7 @@ def test_field_order_is_the_physics_column_order():
 
 def test_default_types():
     t = default_player_type("v19")
-    assert dataclasses.astuple(t) == (1.05, 45.0, 0.4, 5.0, 0.006, 0.3, 0.7, 0.1, 50.0, 1.0, 0.6, 0.027, 0.5, 1.0)
+    assert tuple(t) == (1.05, 45.0, 0.4, 5.0, 0.006, 0.3, 0.7, 0.1, 50.0, 1.0, 0.6, 0.027, 0.5, 1.0)
     assert t.kickable_area(0.085) == pytest.approx(1.085)
     assert t.terminal_speed == pytest.approx(1.0)
     v11 = default_player_type("v11")
@@ -73,6 +72,8 @@ def test_stack_and_from_array_round_trip():
     arr = stack_player_types(types)
     assert arr.shape == (18, len(TYPE_FIELDS)) and arr.dtype == np.float64
     assert [PlayerType.from_array(row) for row in arr] == types
+    assert [PlayerType._make(row) for row in arr.tolist()] == types and PlayerType(*arr[3].tolist()) == types[3]
+    assert all(type(v) is float for v in PlayerType.from_array(arr[1]))
     assert stack_player_types([]).shape == (0, len(TYPE_FIELDS))
     with pytest.raises(ValueError):
         PlayerType.from_array([1.0, 2.0])
@@ -160,7 +161,7 @@ def test_kick_rand_delta_factor_0_changes_only_kick_rand():
     zero = generate_player_types("v19", 3, kick_rand_delta_factor=0.0)
     for b, z in zip(base, zero):
         assert z.kick_rand == 0.1
-        assert dataclasses.replace(b, kick_rand=0.1) == z
+        assert b._replace(kick_rand=0.1) == z
 
 
 # --- ranges and rules -------------------------------------------------------------------------
@@ -244,7 +245,24 @@ def test_default_type_after_1000_failed_trials(n_sets):
     assert generate_player_types(impossible, 1) == [default_player_type(impossible)] * 18
 
 
-# --- the vectorised draw ----------------------------------------------------------------------
+def test_a_rejected_trial_draws_nothing_more():
+    """Spec §7.2: a rejection ends the trial at once; the next trial starts again from the first draw."""
+    profile = with_player(dataclasses.replace(make_profile("v19", kick_rand=0.0), hetero_acceptance="none"), player_types=2)
+    script = iter([0.5, 0.5, 0.2, 0.5, 0.5, 0.9, 0.25, 0.5])  # trial 1 stops after the kickable margin (kick_rand < 0)
+    used = []
+
+    def uniform(lo, hi, n):
+        used.append(n)
+        return lo + (hi - lo) * np.array([next(script) for _ in range(n)])
+
+    t = PlayerType.from_array(draw_type_table(profile, 1, uniform)[0, 1])
+    assert sum(used) == 8  # decay, dash power rate, margin; then decay, dash power rate, margin, extra stamina, stretch
+    assert t.kickable_margin == pytest.approx(0.7 + 0.08) and t.kick_rand == pytest.approx(0.08)
+    assert t.extra_stamina == pytest.approx(62.5) and t.effort_max == pytest.approx(0.95)
+    assert t.catchable_area_l_stretch == pytest.approx(1.15) and t.player_decay == pytest.approx(0.4)
+
+
+# --- one set and many sets --------------------------------------------------------------------
 
 PROFILES = {
     "v19": make_profile("v19"),
@@ -255,45 +273,47 @@ PROFILES = {
 }
 
 
-@pytest.mark.parametrize("scalar_lanes", [1, 0])  # 0 forces the numpy branch even for a single lane
 @pytest.mark.parametrize("name", list(PROFILES))
-def test_one_set_with_server_random_is_the_server(monkeypatch, name, scalar_lanes):
-    monkeypatch.setattr(pt, "_SCALAR_MAX_LANES", scalar_lanes)
+def test_generate_player_types_is_one_set(name):
     profile = PROFILES[name]
-    for seed in range(25):
-        sr = ServerRandom(seed)
-        table = draw_type_table(profile, 1, sr)
-        assert table.shape == (1, profile.player.player_types, len(TYPE_FIELDS))
-        np.testing.assert_array_equal(table[0], stack_player_types(generate_player_types(profile, seed)))
+    for seed in range(10):
+        types = generate_player_types(profile, seed)
+        assert len(types) == profile.player.player_types and all(isinstance(t, PlayerType) for t in types)
+        np.testing.assert_array_equal(stack_player_types(types), draw_type_table(profile, 1, ServerRandom(seed))[0])
 
 
-@pytest.mark.parametrize("name", ["v19", "v19 kick_rand 0"])
-def test_many_sets_same_result_from_either_branch(monkeypatch, name):
-    a = draw_type_table(PROFILES[name], 7, ServerRandom(11))
-    monkeypatch.setattr(pt, "_SCALAR_MAX_LANES", 0)
-    b = draw_type_table(PROFILES[name], 7, ServerRandom(11))
-    np.testing.assert_array_equal(a, b)
-
-
-def test_many_sets_from_a_numpy_generator():
+@pytest.mark.parametrize("kick_rand", [0.1, 0.0])  # with 0, every trial whose margin is below 0.7 is rejected
+def test_many_sets_from_a_numpy_generator(kick_rand):
     rng = np.random.default_rng(0)
-    table = draw_type_table("v19", 500, lambda lo, hi, n: rng.uniform(lo, hi, n))
+    profile = make_profile("v19", kick_rand=kick_rand)
+    table = draw_type_table(profile, 500, lambda lo, hi, n: rng.uniform(lo, hi, n))
     assert table.shape == (500, 18, len(TYPE_FIELDS)) and table.dtype == np.float64
-    np.testing.assert_array_equal(table[:, 0], np.broadcast_to(stack_player_types([default_player_type("v19")]), (500, 14)))
-    assert_in_ranges(table, V19_RANGES)
+    np.testing.assert_array_equal(table[:, 0], np.broadcast_to(stack_player_types([default_player_type(profile)]), (500, 14)))
+    assert_in_ranges(table[:, 1:], V19_RANGES)
     c = {name: table[:, 1:, j] for j, name in enumerate(TYPE_FIELDS)}
     v = 100 * c["dash_power_rate"] * c["effort_max"] / (1 - c["player_decay"])
     assert np.all((0.75 - EPS < v) & (v < 1.05 + EPS))
     np.testing.assert_allclose(c["inertia_moment"], 5 + 25 * (c["player_decay"] - 0.4), atol=1e-12)
-    np.testing.assert_allclose(c["kick_rand"], 0.1 + (c["kickable_margin"] - 0.7), atol=1e-15)
+    np.testing.assert_allclose(c["kick_rand"], kick_rand + (c["kickable_margin"] - 0.7), atol=1e-15)
+    assert np.all(c["kick_rand"] >= 0) and (kick_rand > 0 or np.all(c["kickable_margin"] >= 0.7))
     np.testing.assert_allclose(c["effort_max"] - c["effort_min"], 0.4, atol=1e-12)
     np.testing.assert_allclose(c["extra_stamina"], 50 + (1 - c["effort_max"]) / 0.004, atol=1e-9)
     assert len(np.unique(table[:, 1:].reshape(-1, 14), axis=0)) == 500 * 17  # every set differs
     assert not np.array_equal(table[0], table[1])
 
 
+def test_many_v11_sets_lie_in_v11_ranges():
+    rng = np.random.default_rng(2)
+    table = draw_type_table("v11", 300, lambda lo, hi, n: rng.uniform(lo, hi, n))
+    assert table.shape == (300, 7, len(TYPE_FIELDS))
+    assert_in_ranges(table[:, 1:], V11_RANGES)
+    c = {name: table[:, 1:, j] for j, name in enumerate(TYPE_FIELDS)}
+    assert c["player_decay"].min() < 0.41 and c["player_decay"].max() > 0.59  # no acceptance window cuts the range
+    np.testing.assert_allclose(c["kick_rand"], 0.5 * (c["kickable_margin"] - 0.7), atol=1e-15)
+
+
 def test_many_sets_follow_the_one_type_at_a_time_distribution():
-    """The flat (set, type) lanes must accept the same distribution as drawing type after type."""
+    """Many sets drawn at once (their values interleaved in the stream) follow the distribution of one set at a time."""
     rng = np.random.default_rng(1)
     uniform = lambda lo, hi, n: rng.uniform(lo, hi, n)  # noqa: E731
     flat = draw_type_table("v19", 400, uniform)[:, 1:].reshape(-1, 14)

@@ -10,6 +10,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.utils import seeding
+from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
 from robocup_dribble import physics, skills
@@ -38,15 +39,14 @@ def _configure(profile: str | ServerProfile, noise: bool, render_mode: str | Non
 def parse_action(action: Any) -> tuple[int, np.ndarray]:
     """``(k, (p_dash, p_kick_velocity, p_kick_position, p_kick_align))`` -> ``(k, (7,) params)``."""
     try:
-        action_type, (dash, kick_velocity, kick_position, kick_align) = action
-        parts = (np.ravel(dash), np.ravel(kick_velocity), np.ravel(kick_position), np.ravel(kick_align))
-        params = np.concatenate(parts).astype(np.float64, copy=False)
+        action_type, parts = action
+        params = np.concatenate(parts, axis=None, dtype=np.float64)  # axis=None flattens each part
+        sizes = tuple(part.size if type(part) is np.ndarray else np.size(part) for part in parts)
     except (TypeError, ValueError) as error:
         raise ValueError(
             f"An action must be (action_type, (dash (1,), kick_velocity (2,), kick_position (2,), kick_align (2,))), got {action!r}"
         ) from error
-    if params.size != 7 or tuple(part.size for part in parts) != (1, 2, 2, 2):
-        sizes = tuple(part.size for part in parts)
+    if sizes != (1, 2, 2, 2):
         raise ValueError(f"The parameter vectors of an action must have sizes (1, 2, 2, 2), got {sizes} in {action!r}")
     if isinstance(action_type, (bool, np.bool_)) or not float(action_type).is_integer():
         raise ValueError(f"The action type must be an integer in 0..{skills.N_ACTION_TYPES - 1}, got {action_type!r}")
@@ -275,4 +275,6 @@ class DribbleVecEnv(VecEnv):
         raise AttributeError(f"DribbleVecEnv has no per-lane sub-environments to call {method_name!r} on")
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
-        return [False] * len(self._get_indices(indices))
+        """Lanes are not wrapped, but they report SB3 ``Monitor``'s episode statistics, so ``Monitor`` answers True
+        (SB3's ``evaluate_policy`` asks this to know whether ``info["episode"]`` is there)."""
+        return [issubclass(wrapper_class, Monitor)] * len(self._get_indices(indices))

@@ -13,7 +13,10 @@ from typing import Any
 
 import numpy as np
 
+from robocup_dribble import physics
 from robocup_dribble.env import DribbleVecEnv
+from robocup_dribble.params import make_profile, without_noise
+from robocup_dribble.player_types import draw_type_table
 
 
 @dataclass(frozen=True)
@@ -89,3 +92,22 @@ def reliability_test(policy: Any, n_players: int = 10_000, profile: str = "v19",
     Every episode draws a new set of player types and plays one type of it (``episodes_per_type_set=1``).
     """
     return evaluate_dribbling(policy, n_players, profile, seed, episodes_per_type_set=1, **kwargs)
+
+
+def running_ceiling(profile: str = "v19", n_players: int = 1000, cycles: int = 35, seed: int = 0) -> np.ndarray:
+    """The physical ceiling: metres each of ``n_players`` fresh players covers in ``cycles`` full-power dashes along
+    +x from rest, with no ball and no noise (what no dribbler can beat in an episode of that many actions)."""
+    server_profile = without_noise(make_profile(profile))
+    rng = np.random.default_rng(seed)
+    n_sets = -(-n_players // server_profile.player.player_types)
+    types = draw_type_table(server_profile, n_sets, lambda low, high, size: low + (high - low) * rng.random(size))
+    types = types.reshape(-1, physics.TYPE_SIZE)[:n_players]
+    state = physics.new_state(len(types))
+    physics.recover(state, types, server_profile)
+    state[:, physics.B_Y] = 1e3  # the ball is far away
+    commands = np.tile([physics.CMD_DASH, server_profile.server.max_dash_power, 0.0], (len(types), 1))
+    uniforms = np.full((len(types), physics.N_UNIFORMS), 0.5)
+    constants = physics.profile_constants(server_profile)
+    for _ in range(cycles):
+        physics.step(state, types, commands, uniforms, constants)
+    return state[:, physics.P_X].copy()

@@ -35,9 +35,8 @@ class DribbleLanes:
         self.task = task_settings
         self.rng = rng
         self.observation_space = task.observation_space(profile, task_settings)
-        self.param_low, self.param_high = skills.parameter_bounds(profile)
-        self._obs_low = self.observation_space.low.astype(np.float64)
-        self._obs_high = self.observation_space.high.astype(np.float64)
+        self._bounds = np.stack(skills.parameter_bounds(profile))  # (2, 7): low, high
+        self._obs_bounds = np.stack([self.observation_space.low, self.observation_space.high]).astype(np.float64)
         self._constants = physics.profile_constants(profile)
         self._reward_constants = task_settings.constants()
         n_types = profile.player.player_types
@@ -69,7 +68,7 @@ class DribbleLanes:
         obs, _, _ = task.evaluate(
             self.state[lanes], self.types[lanes], np.zeros((len(lanes), physics.EVENT_SIZE), dtype=np.bool_),
             self.start_x[lanes], self.start_x[lanes], self.distance[lanes], self._reward_constants,
-            self.profile.server.ball_size, self._obs_low, self._obs_high,
+            self.profile.server.ball_size, self._obs_bounds[0], self._obs_bounds[1],
         )
         return obs
 
@@ -84,15 +83,12 @@ class DribbleLanes:
         kinds, params = self._checked(action_types, params)
         n = self.n_lanes
         obs = np.empty((n, len(task.OBSERVATION_NAMES)), dtype=np.float32)
-        reward = np.empty(n)
-        lost = np.empty(n, dtype=np.bool_)
+        outcome = np.empty((n, 2))  # reward, distance
+        ends = np.empty((n, 2), dtype=np.bool_)  # terminated (ball lost), truncated
         uniforms = self.rng.random((n, physics.N_UNIFORMS))
-        _advance(self.state, self.types, kinds, params, self.param_low, self.param_high, uniforms, self._constants,
-                 self._reward_constants, self.profile.server.ball_size, self._obs_low, self._obs_high, self.start_x,
-                 self.distance, obs, reward, lost)
-        self.steps += 1
-        truncated = (self.steps >= self.task.max_actions) & ~lost
-        return obs, reward, lost, truncated, self.distance.copy()
+        _advance(self.state, self.types, kinds, params, self._bounds, uniforms, self._constants, self._reward_constants,
+                 self._obs_bounds, self.start_x, self.distance, self.steps, self.task.max_actions, obs, outcome, ends)
+        return obs, outcome[:, 0], ends[:, 0], ends[:, 1], outcome[:, 1]
 
     def player_type(self, lane: int) -> PlayerType:
         """The player type of a lane's current episode."""
@@ -101,6 +97,9 @@ class DribbleLanes:
     def _checked(self, action_types: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         kinds = np.asarray(action_types)
         params = np.asarray(params, dtype=np.float64)
+        if kinds.dtype == np.int64 and kinds.shape == (self.n_lanes,) and params.shape == (self.n_lanes, skills.N_PARAMS):
+            if _first_invalid(kinds, params) < 0:  # the common case, checked in one compiled call
+                return kinds, params
         if kinds.shape != (self.n_lanes,):
             raise ValueError(f"action types must have shape ({self.n_lanes},), got {kinds.shape}")
         if params.shape != (self.n_lanes, skills.N_PARAMS):
@@ -156,18 +155,26 @@ def _first_invalid(kinds: np.ndarray, params: np.ndarray) -> int:
 
 
 @njit(cache=True)
-def _advance(state, types, kinds, params, low, high, uniforms, k, reward_constants, ball_size, obs_low, obs_high,
-             start_x, distance, obs, reward, lost) -> None:
-    """skills -> physics -> task for every lane, in one compiled loop."""
+def _advance(state, types, kinds, params, bounds, uniforms, k, reward_constants, obs_bounds, start_x, distance, steps,
+             max_actions, obs, outcome, ends) -> None:
+    """skills -> physics -> task for every lane, in one compiled loop.
+
+    Writes ``obs``, ``outcome[:, 0]`` (reward), ``outcome[:, 1]`` (distance), ``ends[:, 0]`` (ball lost) and
+    ``ends[:, 1]`` (truncated); advances ``state``, ``distance`` and ``steps`` in place.
+    """
     command = np.empty(physics.COMMAND_SIZE)
     clipped = np.empty(params.shape[1])
     events = np.empty(physics.EVENT_SIZE, dtype=np.bool_)
+    ball_size = k[physics.K_BALL_SIZE]
     for i in range(state.shape[0]):
         s, t = state[i], types[i]
         for j in range(clipped.shape[0]):
-            clipped[j] = min(max(params[i, j], low[j]), high[j])
+            clipped[j] = min(max(params[i, j], bounds[0, j]), bounds[1, j])
         skills.command_lane(s, t, kinds[i], clipped, k, command)
         previous_x = s[physics.P_X]
         physics.step_lane(s, t, command, uniforms[i], k, events)
-        reward[i], lost[i] = task.evaluate_lane(s, t, events, previous_x, start_x[i], distance[i:i + 1], reward_constants,
-                                                ball_size, obs_low, obs_high, obs[i])
+        reward, lost = task.evaluate_lane(s, t, events, previous_x, start_x[i], distance[i:i + 1], reward_constants,
+                                          ball_size, obs_bounds[0], obs_bounds[1], obs[i])
+        steps[i] += 1
+        outcome[i, 0], outcome[i, 1] = reward, distance[i]
+        ends[i, 0], ends[i, 1] = lost, steps[i] >= max_actions and not lost

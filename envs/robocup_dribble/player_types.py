@@ -1,24 +1,15 @@
 """Heterogeneous player types, drawn the way rcssserver draws them.
 
 Reference: ``../shared/ref/rcssserver-physics.md`` §7 (read from rcssserver's ``src/heteroplayer.cpp``):
+§7.1 the default type 0 (:func:`default_player_type`); §7.2 the generation of types 1 .. player_types-1
+(:func:`draw_type_table`, the one implementation, vectorised over independent type sets); §7.3 the ranges of
+each era (``player::`` parameters in :mod:`robocup_dribble.params`); §7.4 the random source of rcssserver 19
+(:class:`ServerRandom`), with which :func:`generate_player_types` reproduces the ``(player_type ...)`` messages
+of a real rcssserver 19.0.0 for a given seed.
 
-* §7.1 the default type (type 0) comes from the ``server::`` parameters: :func:`default_player_type`.
-* §7.2 types 1 .. player_types-1 are drawn in order, each by up to 1000 trials of seven trade-offs plus the
-  catchable-area stretch (v14+), with rejection rules after each draw and, since v12, an acceptance window
-  on the terminal speed; after 1000 failed trials the type falls back to the default.
-* §7.3 the ranges of each server era (``player::`` parameters in :mod:`robocup_dribble.params`).
-* §7.4 the random source of rcssserver 19: a ``std::mt19937`` seeded with ``player::random_seed`` and
-  libstdc++'s ``uniform_real_distribution``: :class:`ServerRandom`.
-
-:func:`generate_player_types` is a literal, one-type-at-a-time implementation of §7.2; with the v19 profile it
-reproduces the ``(player_type ...)`` messages of a real rcssserver 19.0.0 for a given seed.
-:func:`draw_type_table` is the vectorised version the environment uses to draw many type tables at once.
-
-The v11 profile uses the same recipe with the v11 ranges (§7.3): 7 types, no acceptance window
-(``hetero_acceptance="none"``) and no catchable-area draw (``catchable_area_stretch=False``, the stretch
-stays 1.0).  The 2007 server drew with ``boost::mt19937`` + ``boost::uniform_real`` seeded from the clock,
-so its actual types cannot be reproduced bit-exactly from a seed; the v11 types here follow the v11
-distribution, not a particular v11 server run.
+The v11 profile uses the same recipe with the v11 ranges: 7 types, no acceptance window and no catchable-area
+draw (the stretch stays 1.0).  The 2007 server drew with ``boost::mt19937`` seeded from the clock, so the v11
+types follow the v11 distribution, not a particular v11 server run.
 """
 
 from __future__ import annotations
@@ -26,8 +17,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-from typing import Any
+from typing import NamedTuple
 
 import numpy as np
 
@@ -35,15 +25,11 @@ from .params import EPS, ServerProfile, make_profile
 
 MAX_TRIALS = 1000  # rcssserver HeteroPlayer::HeteroPlayer()
 
-Uniform = Callable[[float, float, int], np.ndarray]
+Uniform = Callable[[float, float, int], np.ndarray]  # uniform(lo, hi, n): n values in [lo, hi)
 
 
-@dataclass(frozen=True)
-class PlayerType:
-    """One heterogeneous player type (the numbers of a ``(player_type ...)`` message).
-
-    The field order is the column order of :func:`stack_player_types` and :func:`draw_type_table`.
-    """
+class PlayerType(NamedTuple):
+    """One heterogeneous player type (a ``(player_type ...)`` message), fields in the column order of the tables."""
 
     player_speed_max: float
     stamina_inc_max: float
@@ -74,54 +60,35 @@ class PlayerType:
         """Build a type from one row of :func:`stack_player_types` / :func:`draw_type_table`."""
         if len(row) != len(TYPE_FIELDS):
             raise ValueError(f"expected {len(TYPE_FIELDS)} values ({', '.join(TYPE_FIELDS)}), got {len(row)}")
-        return cls(*(float(v) for v in row))
+        return cls._make(float(v) for v in row)
 
 
-TYPE_FIELDS: tuple[str, ...] = tuple(f.name for f in dataclasses.fields(PlayerType))
-_COL = {name: j for j, name in enumerate(TYPE_FIELDS)}
-
-
-def _profile(profile: str | ServerProfile) -> ServerProfile:
-    return make_profile(profile)
+TYPE_FIELDS: tuple[str, ...] = PlayerType._fields
+_SPEED_MAX, _DECAY, _DASH_POWER_RATE, _EFFORT_MAX = (
+    TYPE_FIELDS.index(f) for f in ("player_speed_max", "player_decay", "dash_power_rate", "effort_max")
+)
 
 
 def default_player_type(profile: str | ServerProfile = "v19") -> PlayerType:
     """Type 0: the ``server::`` values (spec §7.1); the catchable-area stretch is 1."""
-    s = _profile(profile).server
-    return PlayerType(
-        player_speed_max=s.player_speed_max,
-        stamina_inc_max=s.stamina_inc_max,
-        player_decay=s.player_decay,
-        inertia_moment=s.inertia_moment,
-        dash_power_rate=s.dash_power_rate,
-        player_size=s.player_size,
-        kickable_margin=s.kickable_margin,
-        kick_rand=s.kick_rand,
-        extra_stamina=s.extra_stamina,
-        effort_max=s.effort_init,
-        effort_min=s.effort_min,
-        kick_power_rate=s.kick_power_rate,
-        foul_detect_probability=s.foul_detect_probability,
-        catchable_area_l_stretch=1.0,
-    )
+    s = make_profile(profile).server
+    return PlayerType(s.player_speed_max, s.stamina_inc_max, s.player_decay, s.inertia_moment, s.dash_power_rate,
+                      s.player_size, s.kickable_margin, s.kick_rand, s.extra_stamina, s.effort_init,  # effort_max
+                      s.effort_min, s.kick_power_rate, s.foul_detect_probability, 1.0)  # fmt: skip
 
 
 def stack_player_types(types: Sequence[PlayerType]) -> np.ndarray:
     """Stack types into a ``(n, len(TYPE_FIELDS))`` float64 array, columns in :data:`TYPE_FIELDS` order."""
-    rows = [[getattr(t, f) for f in TYPE_FIELDS] for t in types]
-    return np.array(rows, dtype=np.float64).reshape(len(types), len(TYPE_FIELDS))
+    return np.array([tuple(t) for t in types], dtype=np.float64).reshape(len(types), len(TYPE_FIELDS))
 
 
 class ServerRandom:
-    """The random source of rcssserver 19's ``HeteroPlayer::delta`` (spec §7.4).
+    """The random source of rcssserver 19's ``HeteroPlayer::delta`` (spec §7.4), a ``uniform(lo, hi, n)`` callable.
 
-    ``std::mt19937`` seeded with ``player::random_seed``; each uniform value takes two 32-bit outputs
-    x1 then x2, ``u = (x1 + x2 * 2**32) / 2**64`` (clamped below 1, as libstdc++'s ``generate_canonical``)
-    and returns ``lo + (hi - lo) * u``.  numpy's legacy ``RandomState`` uses the same Mersenne Twister
-    initialisation, so ``randint(0, 2**32, dtype=np.uint64)`` yields the raw stream; it is fetched and turned
-    into ``u`` values in blocks.
-
-    An instance is a ``uniform(lo, hi, n)`` callable for :func:`draw_type_table`.
+    ``std::mt19937`` seeded with ``player::random_seed``; each uniform value takes two 32-bit outputs x1 then x2,
+    ``u = (x1 + x2 * 2**32) / 2**64`` (clamped below 1, as libstdc++'s ``generate_canonical``) and returns
+    ``lo + (hi - lo) * u``.  numpy's legacy ``RandomState`` has the same Mersenne Twister initialisation, so
+    ``randint(0, 2**32, dtype=np.uint64)`` yields the raw stream; it is fetched and turned into ``u`` in blocks.
     """
 
     _TWO32 = 4294967296.0
@@ -161,388 +128,144 @@ class ServerRandom:
     __call__ = uniform
 
 
-# --------------------------------------------------------------------------------------------------
-# Reference implementation: one type at a time, statement by statement as spec §7.2.
+def _steps(profile: ServerProfile) -> list:
+    """Spec §7.2 steps 1-8 in the server's order: ``((delta min, delta max), [(column, a, b, rule), ...])``.
 
-
-def _reference_type(profile: ServerProfile, uniform: Uniform) -> PlayerType:
-    s, p = profile.server, profile.player
-
-    def delta(lo: float, hi: float) -> float:
-        if lo == hi:
-            return lo  # no random number is consumed
-        if lo > hi:
-            lo, hi = hi, lo
-        return float(uniform(lo, hi, 1)[0])
-
-    for _ in range(MAX_TRIALS):
-        d = delta(p.player_speed_max_delta_min, p.player_speed_max_delta_max)
-        speed_max = s.player_speed_max + d
-        if speed_max <= 0.0:
-            continue
-        stamina_inc = s.stamina_inc_max + d * p.stamina_inc_max_delta_factor
-        if stamina_inc <= 0.0:
-            continue
-
-        d = delta(p.player_decay_delta_min, p.player_decay_delta_max)
-        decay = s.player_decay + d
-        if decay <= 0.0:
-            continue
-        inertia = s.inertia_moment + d * p.inertia_moment_delta_factor
-        if inertia < 0.0:
-            continue
-
-        d = delta(p.dash_power_rate_delta_min, p.dash_power_rate_delta_max)
-        if s.dash_power_rate + d <= 0.0:
-            continue
-        size = s.player_size + d * p.player_size_delta_factor
-        if size <= 0.0:
-            continue
-
-        d = delta(p.new_dash_power_rate_delta_min, p.new_dash_power_rate_delta_max)
-        dash_power_rate = s.dash_power_rate + d
-        if dash_power_rate <= 0.0:
-            continue
-        stamina_inc = s.stamina_inc_max + d * p.new_stamina_inc_max_delta_factor
-        if stamina_inc <= 0.0:
-            continue
-
-        d = delta(p.kickable_margin_delta_min, p.kickable_margin_delta_max)
-        margin = s.kickable_margin + d
-        if margin <= 0.0:
-            continue
-        kick_rand = s.kick_rand + d * p.kick_rand_delta_factor
-        if kick_rand < 0.0:
-            continue
-
-        d = delta(p.extra_stamina_delta_min, p.extra_stamina_delta_max)
-        extra = s.extra_stamina + d
-        if extra < 0.0:
-            continue
-        effort_max = s.effort_init + d * p.effort_max_delta_factor
-        effort_min = s.effort_min + d * p.effort_min_delta_factor
-        if effort_max <= 0.0 or effort_min <= 0.0:
-            continue
-
-        d = delta(p.kick_power_rate_delta_min, p.kick_power_rate_delta_max)
-        kick_power_rate = s.kick_power_rate + d
-        foul = s.foul_detect_probability + d * p.foul_detect_probability_delta_factor
-
-        stretch = 1.0
-        if profile.catchable_area_stretch:
-            stretch = delta(p.catchable_area_l_stretch_min, p.catchable_area_l_stretch_max)
-
-        t = PlayerType(speed_max, stamina_inc, decay, inertia, dash_power_rate, size, margin, kick_rand,
-                       extra, effort_max, effort_min, kick_power_rate, foul, stretch)
-        if profile.hetero_acceptance == "none":
-            return t
-        v = (s.max_power * dash_power_rate * effort_max) / (1.0 - decay)
-        if s.player_speed_max_min - EPS < v < speed_max + EPS:
-            return t
-    return default_player_type(profile)
-
-
-def generate_player_types(
-    profile: str | ServerProfile = "v19",
-    seed: int = 1,
-    kick_rand_delta_factor: float | None = None,
-) -> list[PlayerType]:
-    """The types a server generates with ``player::random_seed = seed`` (list index = type id).
-
-    Exact for the v19 profile (spec §7.4).  ``kick_rand_delta_factor`` overrides
-    ``profile.player.kick_rand_delta_factor`` (the golden recordings use 0 together with server kick_rand 0;
-    pass such a profile as ``make_profile("v19", kick_rand=0)``).  The default seed 1 is the one the golden
-    recordings were made with.
+    Each step draws one delta d and computes the values ``a + d * b``; ``column`` is the TYPE_FIELDS column the
+    value sets (None: the value is only checked, a later step sets that column) and ``rule`` rejects the trial
+    unless the value is ``">0"`` or ``">=0"`` (``""``: no check).
     """
-    prof = _profile(profile)
-    if kick_rand_delta_factor is not None:
-        player = dataclasses.replace(prof.player, kick_rand_delta_factor=kick_rand_delta_factor)
-        prof = dataclasses.replace(prof, player=player)
-    rng = ServerRandom(seed)
-    return [default_player_type(prof)] + [_reference_type(prof, rng) for _ in range(1, prof.player.player_types)]
+    s, p = profile.server, profile.player
+    stretch = (p.catchable_area_l_stretch_min, p.catchable_area_l_stretch_max)
+    return [
+        ((p.player_speed_max_delta_min, p.player_speed_max_delta_max),
+         [("player_speed_max", s.player_speed_max, 1.0, ">0"),
+          (None, s.stamina_inc_max, p.stamina_inc_max_delta_factor, ">0")]),
+        ((p.player_decay_delta_min, p.player_decay_delta_max),
+         [("player_decay", s.player_decay, 1.0, ">0"),
+          ("inertia_moment", s.inertia_moment, p.inertia_moment_delta_factor, ">=0")]),
+        ((p.dash_power_rate_delta_min, p.dash_power_rate_delta_max),
+         [(None, s.dash_power_rate, 1.0, ">0"),
+          ("player_size", s.player_size, p.player_size_delta_factor, ">0")]),
+        ((p.new_dash_power_rate_delta_min, p.new_dash_power_rate_delta_max),
+         [("dash_power_rate", s.dash_power_rate, 1.0, ">0"),
+          ("stamina_inc_max", s.stamina_inc_max, p.new_stamina_inc_max_delta_factor, ">0")]),
+        ((p.kickable_margin_delta_min, p.kickable_margin_delta_max),
+         [("kickable_margin", s.kickable_margin, 1.0, ">0"),
+          ("kick_rand", s.kick_rand, p.kick_rand_delta_factor, ">=0")]),
+        ((p.extra_stamina_delta_min, p.extra_stamina_delta_max),
+         [("extra_stamina", s.extra_stamina, 1.0, ">=0"),
+          ("effort_max", s.effort_init, p.effort_max_delta_factor, ">0"),
+          ("effort_min", s.effort_min, p.effort_min_delta_factor, ">0")]),
+        ((p.kick_power_rate_delta_min, p.kick_power_rate_delta_max),
+         [("kick_power_rate", s.kick_power_rate, 1.0, ""),
+          ("foul_detect_probability", s.foul_detect_probability, p.foul_detect_probability_delta_factor, "")]),
+        (stretch if profile.catchable_area_stretch else (1.0, 1.0),  # before v14: no draw, the stretch stays 1
+         [("catchable_area_l_stretch", 0.0, 1.0, "")]),
+    ]  # fmt: skip
 
 
-# --------------------------------------------------------------------------------------------------
-# Vectorised implementation.
-#
-# Of the eight deltas of a trial (spec §7.2 steps 1-8) only those with min != max are drawn; they are the rows of
-# a (n_drawn, lanes) array.  Every final field and every rejection check is ``a + delta * b`` for one delta
-# (with b = 1 the product is exact), the same floating-point operations as the reference, so the values are
-# bit-identical to it.
-
-_SCALAR_MAX_LANES = 1  # a trial with this few pending lanes runs on Python floats (far less overhead than numpy)
+class _Recipe(NamedTuple):
+    lo: np.ndarray  # (n_steps, 1) each step's lower delta bound (its delta when min == max)
+    segments: list  # [(steps, lo, span, checks)]: draw the deltas of steps in one call, then the checks
+    src: np.ndarray  # (F,) the step that sets each column: column = a + delta[src] * b
+    a: np.ndarray  # (F, 1)
+    b: np.ndarray  # (F, 1)
+    window: tuple[float, float] | None  # (max_power, player_speed_max_min - EPS); None: accept every type
 
 
-@dataclass(frozen=True)
-class _Term:
-    """``a + delta * b``; ``row`` is the delta's row among the drawn ones, None for a constant delta."""
-
-    row: int | None
-    a: float
-    b: float
-    const: float  # the value when row is None
-
-
-@dataclass(frozen=True)
-class _Check:
-    term: _Term
-    strict: bool  # reject if the value is <= 0 (strict) or < 0
-
-    def passes(self, value: float) -> bool:
-        return _passes(value, self.strict)
-
-
-def _passes(value: float, strict: bool) -> bool:
+def _passes(value, strict: bool):
+    """The rejection rule of spec §7.2: a value must be > 0 (strict) or >= 0; for floats and arrays."""
     return value > 0.0 if strict else value >= 0.0
 
 
-@dataclass(frozen=True)
-class _Plan:
-    lo: np.ndarray  # (n_drawn, 1) lower bounds of the drawn deltas
-    span: np.ndarray  # (n_drawn, 1) hi - lo
-    segments: tuple[tuple[int, int, tuple[_Check, ...]], ...]  # (first row, end row, checks after these draws)
-    fields: tuple[_Term, ...]  # in TYPE_FIELDS order
-    window: tuple[float, float, float] | None  # (max_power, player_speed_max_min - EPS, EPS), None: accept all
-    default: np.ndarray  # (F,) the default type
-    # for expanding: field j = a[j] + ext[src[j]] * b[j], ext = drawn deltas followed by the constant deltas
-    const_rows: np.ndarray  # (n_const, 1)
-    src: np.ndarray  # (F,)
-    a: np.ndarray  # (F, 1)
-    b: np.ndarray  # (F, 1)
-
-    def term(self, name: str) -> _Term:
-        return self.fields[_COL[name]]
-
-
 @functools.lru_cache(maxsize=16)
-def _make_plan(profile: ServerProfile) -> _Plan:
-    s, p = profile.server, profile.player
-    # step: (delta bounds, {field: (a, b)}, rejection checks (a, b, strict)) in the server's order
-    stretch = (p.catchable_area_l_stretch_min, p.catchable_area_l_stretch_max)
-    if not profile.catchable_area_stretch:
-        stretch = (1.0, 1.0)  # no draw; the stretch stays 1
-    steps = [
-        ((p.player_speed_max_delta_min, p.player_speed_max_delta_max),
-         {"player_speed_max": (s.player_speed_max, 1.0)},
-         [(s.player_speed_max, 1.0, True), (s.stamina_inc_max, p.stamina_inc_max_delta_factor, True)]),
-        ((p.player_decay_delta_min, p.player_decay_delta_max),
-         {"player_decay": (s.player_decay, 1.0), "inertia_moment": (s.inertia_moment, p.inertia_moment_delta_factor)},
-         [(s.player_decay, 1.0, True), (s.inertia_moment, p.inertia_moment_delta_factor, False)]),
-        ((p.dash_power_rate_delta_min, p.dash_power_rate_delta_max),
-         {"player_size": (s.player_size, p.player_size_delta_factor)},
-         [(s.dash_power_rate, 1.0, True), (s.player_size, p.player_size_delta_factor, True)]),
-        ((p.new_dash_power_rate_delta_min, p.new_dash_power_rate_delta_max),
-         {"dash_power_rate": (s.dash_power_rate, 1.0),
-          "stamina_inc_max": (s.stamina_inc_max, p.new_stamina_inc_max_delta_factor)},
-         [(s.dash_power_rate, 1.0, True), (s.stamina_inc_max, p.new_stamina_inc_max_delta_factor, True)]),
-        ((p.kickable_margin_delta_min, p.kickable_margin_delta_max),
-         {"kickable_margin": (s.kickable_margin, 1.0), "kick_rand": (s.kick_rand, p.kick_rand_delta_factor)},
-         [(s.kickable_margin, 1.0, True), (s.kick_rand, p.kick_rand_delta_factor, False)]),
-        ((p.extra_stamina_delta_min, p.extra_stamina_delta_max),
-         {"extra_stamina": (s.extra_stamina, 1.0), "effort_max": (s.effort_init, p.effort_max_delta_factor),
-          "effort_min": (s.effort_min, p.effort_min_delta_factor)},
-         [(s.extra_stamina, 1.0, False), (s.effort_init, p.effort_max_delta_factor, True),
-          (s.effort_min, p.effort_min_delta_factor, True)]),
-        ((p.kick_power_rate_delta_min, p.kick_power_rate_delta_max),
-         {"kick_power_rate": (s.kick_power_rate, 1.0),
-          "foul_detect_probability": (s.foul_detect_probability, p.foul_detect_probability_delta_factor)},
-         []),
-        (stretch, {"catchable_area_l_stretch": (0.0, 1.0)}, []),
-    ]
-    lo_rows: list[float] = []
-    span_rows: list[float] = []
-    fields: dict[str, _Term] = {}
-    const_of_field: dict[str, float] = {}
-    segments = []
-    first = 0
-    for bounds, step_fields, checks in steps:
-        lo, hi = min(bounds), max(bounds)
-        row = None
-        ends = [lo]
-        if lo != hi:
-            row = len(lo_rows)
-            lo_rows.append(lo)
-            span_rows.append(hi - lo)
-            ends.append(lo + (hi - lo))  # a drawn delta lo + (hi - lo) * u lies in [lo, this] (rounding is monotone)
-        for name, (a, b) in step_fields.items():
-            fields[name] = _Term(row, a, b, a + lo * b)
-            const_of_field[name] = lo
-        # Only checks that can fail somewhere in the delta's range need evaluating (a + d*b is monotone in d).
-        live = tuple(
-            _Check(_Term(row, a, b, a + lo * b), strict)
-            for a, b, strict in checks
-            if not all(_passes(a + d * b, strict) for d in ends)
-        )
-        if live:
-            segments.append((first, len(lo_rows), live))
-            first = len(lo_rows)
-    if first < len(lo_rows) or not segments:
-        segments.append((first, len(lo_rows), ()))
-    window = None
-    if profile.hetero_acceptance == "speed_window":
-        window = (s.max_power, s.player_speed_max_min - EPS, EPS)
-    terms = tuple(fields[n] for n in TYPE_FIELDS)
-    const_names = [n for n in TYPE_FIELDS if fields[n].row is None]
-    src = [t.row if t.row is not None else len(lo_rows) + const_names.index(n) for n, t in zip(TYPE_FIELDS, terms)]
-    return _Plan(
-        lo=np.array(lo_rows, dtype=np.float64).reshape(-1, 1),
-        span=np.array(span_rows, dtype=np.float64).reshape(-1, 1),
-        segments=tuple(segments),
-        fields=terms,
-        window=window,
-        default=stack_player_types([default_player_type(profile)])[0],
-        const_rows=np.array([const_of_field[n] for n in const_names], dtype=np.float64).reshape(-1, 1),
-        src=np.array(src, dtype=np.intp),
-        a=np.array([t.a for t in terms], dtype=np.float64).reshape(-1, 1),
-        b=np.array([t.b for t in terms], dtype=np.float64).reshape(-1, 1),
-    )
+def _recipe(profile: ServerProfile) -> _Recipe:
+    """:func:`_steps` arranged for drawing many sets at once (computed once per profile)."""
+    steps = _steps(profile)
+    lo = np.array([min(bounds) for bounds, _ in steps])  # the server swaps reversed bounds
+    span = np.array([max(bounds) for bounds, _ in steps]) - lo
+    segments, drawn = [], []
+    for i, (_, terms) in enumerate(steps):
+        if span[i]:
+            drawn.append(i)
+        checks = []
+        for _, a, b, rule in terms:
+            # a + d * b is monotone in d, and a drawn d = lo + span * u lies in [lo, lo + span]: a check that passes
+            # at both ends never rejects and is left out, so the draws up to the next check that can fail are one call.
+            if rule and not all(_passes(a + d * b, rule == ">0") for d in (lo[i], lo[i] + span[i])):
+                checks.append((i, a, b, rule == ">0"))
+        if checks or i == len(steps) - 1:
+            segments.append((np.array(drawn, dtype=np.intp), lo[drawn, None], span[drawn, None], checks))
+            drawn = []
+    columns = {column: (i, a, b) for i, (_, terms) in enumerate(steps) for column, a, b, _ in terms if column}
+    src, a, b = zip(*(columns[name] for name in TYPE_FIELDS))
+    s = profile.server
+    window = (s.max_power, s.player_speed_max_min - EPS) if profile.hetero_acceptance == "speed_window" else None
+    return _Recipe(lo[:, None], segments, np.array(src), np.array(a)[:, None], np.array(b)[:, None], window)
 
 
-def _value(term: _Term, d: Any) -> Any:
-    """The term for drawn deltas ``d`` (rows of an array, or a list of floats for one lane)."""
-    if term.row is None:
-        return term.const
-    if term.b == 1.0:  # d * 1.0 == d exactly
-        return term.a + d[term.row]
-    return term.a + d[term.row] * term.b
+def _trial(r: _Recipe, sets: np.ndarray, uniform: Uniform) -> tuple[np.ndarray, np.ndarray]:
+    """One trial (spec §7.2 steps 1-9) for each of ``sets``: the sets that accepted their type and the types ``(F, n)``.
 
-
-def _accepts(plan: _Plan, d: Any) -> Any:
-    """Spec §7.2 step 9 for the drawn deltas ``d`` (rows), or True without a window."""
-    if plan.window is None:
-        return True
-    max_power, v_min, eps = plan.window
-    v = (max_power * _value(plan.term("dash_power_rate"), d) * _value(plan.term("effort_max"), d)) / (
-        1.0 - _value(plan.term("player_decay"), d)
-    )
-    return (v_min < v) & (v < _value(plan.term("player_speed_max"), d) + eps)
-
-
-def _scalar_lane(plan: _Plan, uniform: Uniform, trials: int) -> list[float] | None:
-    """One lane on Python floats: the drawn deltas of the first accepted trial, None after ``trials`` failures."""
-    lo = plan.lo[:, 0].tolist()
-    span = plan.span[:, 0].tolist()
-    for _ in range(trials):
-        d = [0.0] * len(lo)
-        for r0, r1, checks in plan.segments:
-            if r1 > r0:
-                us = np.asarray(uniform(0.0, 1.0, r1 - r0), dtype=np.float64).tolist()
-                for r, u in zip(range(r0, r1), us):
-                    d[r] = lo[r] + span[r] * u
-            if not all(c.passes(_value(c.term, d)) for c in checks):
-                break
-        else:
-            if _accepts(plan, d):
-                return d
-    return None
-
-
-def _draw_deltas(plan: _Plan, n_lanes: int, uniform: Uniform) -> tuple[np.ndarray, np.ndarray]:
-    """Drawn deltas of ``n_lanes`` accepted types, ``(n_drawn, n_lanes)``, and the lanes that used up all trials.
-
-    Each trial draws for the lanes still pending, segment by segment for the lanes still alive in the trial
-    (one call per segment, one row of values per delta), so a single lane consumes the stream in the server's order.
+    A set rejected by a check draws nothing more in this trial; the draws of one call are laid out step-major,
+    so a single set takes the values from the stream in the server's order.
     """
-    nd = plan.lo.shape[0]
-    deltas = np.empty((nd, n_lanes))
-    if n_lanes == 1 and _SCALAR_MAX_LANES >= 1:  # the common n_sets == 1 case, without any set-up
-        d = _scalar_lane(plan, uniform, MAX_TRIALS)
-        if d is None:
-            return deltas, np.zeros(1, dtype=np.intp)
-        deltas[:, 0] = d
-        return deltas, np.zeros(0, dtype=np.intp)
-    pending = np.arange(n_lanes)
-    for trial in range(MAX_TRIALS):
-        k = pending.size
-        if k == 0:
-            break
-        if k <= _SCALAR_MAX_LANES:
-            failed = []
-            for lane in pending.tolist():
-                d = _scalar_lane(plan, uniform, MAX_TRIALS - trial)
-                if d is None:
-                    failed.append(lane)
-                else:
-                    deltas[:, lane] = d
-            return deltas, np.array(failed, dtype=np.intp)
-        d = deltas if k == n_lanes else np.empty((nd, k))  # the first trial writes in place
-        alive = None  # positions (in pending) still in this trial; None = all
-        for r0, r1, checks in plan.segments:
-            n = k if alive is None else alive.size
-            if n == 0:
-                break
-            if r1 > r0:
-                u = np.asarray(uniform(0.0, 1.0, n * (r1 - r0)), dtype=np.float64).reshape(r1 - r0, n)
-                if alive is None:
-                    rows = d[r0:r1]
-                    np.multiply(plan.span[r0:r1], u, out=rows)
-                    rows += plan.lo[r0:r1]
-                else:
-                    d[r0:r1, alive] = plan.lo[r0:r1] + plan.span[r0:r1] * u
-            for c in checks:
-                v = _value(c.term, d if alive is None else d[:, alive])
-                ok = np.broadcast_to(c.passes(v), (n,))
-                alive = np.flatnonzero(ok) if alive is None else alive[ok]
-        if d is not deltas:
-            deltas[:, pending] = d  # lanes rejected in this trial are overwritten by a later one
-        if alive is None:
-            done = np.broadcast_to(_accepts(plan, d), (k,))
-        else:
-            done = np.zeros(k, dtype=bool)
-            done[alive] = _accepts(plan, d[:, alive])
-        pending = pending[~done]
-    return deltas, pending
-
-
-def _expand(plan: _Plan, deltas: np.ndarray, out: np.ndarray) -> None:
-    """Write the types of ``deltas`` (``(n_drawn, a*b)``) into ``out`` (``(a, b, F)``)."""
-    nd, n = deltas.shape
-    ext = np.empty((nd + plan.const_rows.shape[0], n))
-    ext[:nd] = deltas
-    ext[nd:] = plan.const_rows
-    block = ext[plan.src]  # field-major (F, n): contiguous rows, then one transposed copy
-    block *= plan.b
-    block += plan.a
-    out[...] = block.T.reshape(out.shape)
+    delta = np.empty((r.lo.size, sets.size))
+    delta[:] = r.lo  # a step without a draw keeps its one value
+    for steps, lo, span, checks in r.segments:
+        if steps.size and sets.size:
+            delta[steps] = lo + span * uniform(0.0, 1.0, steps.size * sets.size).reshape(steps.size, -1)
+        for step, a, b, strict in checks:
+            ok = _passes(a + delta[step] * b, strict)
+            sets, delta = sets[ok], delta[:, ok]
+    t = r.a + delta[r.src] * r.b  # with b == 1, a + d * 1 is a + d exactly, as the server computes it
+    if r.window is None:
+        return sets, t
+    max_power, v_min = r.window  # step 9
+    v = (max_power * t[_DASH_POWER_RATE] * t[_EFFORT_MAX]) / (1.0 - t[_DECAY])
+    inside = (v_min < v) & (v < t[_SPEED_MAX] + EPS)
+    return sets[inside], t[:, inside]
 
 
 def draw_type_table(profile: str | ServerProfile, n_sets: int, uniform: Uniform) -> np.ndarray:
     """Draw ``n_sets`` independent type tables: ``(n_sets, player_types, len(TYPE_FIELDS))`` float64.
 
-    Row 0 of each set is the default type; rows 1.. follow spec §7.2 (draw order, no draw when min == max,
-    swapped bounds, rejection rules, acceptance window or none, default after 1000 trials).
-    ``uniform(lo, hi, n)`` returns ``n`` uniform values in [lo, hi); it is called as ``uniform(0.0, 1.0, n)`` and
-    scaled here with the server's formula ``lo + (hi - lo) * u``.  With a numpy Generator ``rng``:
-    ``draw_type_table("v19", 4096, lambda lo, hi, n: rng.uniform(lo, hi, n))``.
-
-    Vectorised over sets: Python loops over trials (and types), never over sets.  With ``n_sets == 1`` the types
-    are drawn one after the other and every trial takes its values from the stream in the server's order, so a
-    :class:`ServerRandom` source reproduces :func:`generate_player_types` exactly.  With ``n_sets > 1`` all
-    (set, type) pairs are drawn together as independent lanes (the same distribution, far fewer Python steps).
+    Row 0 of each set is the default type; types 1.. are drawn one after the other, each trial for all the sets
+    still without that type at once.  ``uniform(lo, hi, n)`` returns ``n`` uniform values in [lo, hi), e.g.
+    ``lambda lo, hi, n: rng.uniform(lo, hi, n)`` for a numpy Generator ``rng``; it is called with (0, 1) and the
+    values are scaled here as the server does, ``lo + (hi - lo) * u``.  With ``n_sets == 1`` and a
+    :class:`ServerRandom` this is the server's stream, value for value; with more sets their values interleave
+    in the stream (each set still follows the server's distribution).
     """
-    prof = _profile(profile)
+    prof = make_profile(profile)
     n_sets = int(n_sets)
     if n_sets < 0:
         raise ValueError(f"n_sets must be >= 0, got {n_sets}")
-    n_types = prof.player.player_types
-    plan = _make_plan(prof)
-    default = plan.default
-    table = np.empty((n_sets, n_types, default.size))
-    table[:, 0] = default
-    if n_types == 1 or n_sets == 0:
-        return table
-    if n_sets == 1:  # one type after the other, as the server
-        deltas = np.empty((plan.lo.shape[0], n_types - 1))
-        failed_list = []
-        for t in range(n_types - 1):
-            d, f = _draw_deltas(plan, 1, uniform)
-            if f.size:
-                failed_list.append(t)
-            else:
-                deltas[:, t] = d[:, 0]
-        failed = np.array(failed_list, dtype=np.intp)
-    else:
-        deltas, failed = _draw_deltas(plan, n_sets * (n_types - 1), uniform)
-    _expand(plan, deltas, table[:, 1:])
-    table[failed // (n_types - 1), 1 + failed % (n_types - 1)] = default
+    recipe = _recipe(prof)
+    table = np.empty((n_sets, prof.player.player_types, len(TYPE_FIELDS)))
+    table[:] = default_player_type(prof)  # and so stays every type whose 1000 trials all failed
+    for type_id in range(1, prof.player.player_types):
+        pending = np.ones(n_sets, dtype=bool)
+        for _ in range(MAX_TRIALS):
+            sets = np.flatnonzero(pending)
+            if not sets.size:
+                break
+            accepted, types = _trial(recipe, sets, uniform)
+            table[accepted, type_id] = types.T
+            pending[accepted] = False
     return table
+
+
+def generate_player_types(profile: str | ServerProfile = "v19", seed: int = 1,
+                          kick_rand_delta_factor: float | None = None) -> list[PlayerType]:
+    """The types a server generates with ``player::random_seed = seed`` (list index = type id); exact for v19 (§7.4).
+
+    ``kick_rand_delta_factor`` overrides ``profile.player.kick_rand_delta_factor`` (the golden recordings use 0 with
+    server kick_rand 0, i.e. ``make_profile("v19", kick_rand=0)``); they were made with the default seed 1.
+    """
+    prof = make_profile(profile)
+    if kick_rand_delta_factor is not None:
+        player = dataclasses.replace(prof.player, kick_rand_delta_factor=kick_rand_delta_factor)
+        prof = dataclasses.replace(prof, player=player)
+    return [PlayerType._make(row) for row in draw_type_table(prof, 1, ServerRandom(seed))[0].tolist()]

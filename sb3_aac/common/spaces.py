@@ -169,9 +169,16 @@ class ParameterizedActionSpec:
         return np.divide(centred, half, out=np.zeros(centred.shape), where=half > 0)
 
     def unscale(self, params_scaled: np.ndarray) -> np.ndarray:
-        """Map parameters from ``[-1, 1]`` to ``[low, high]`` and clip them inside the bounds. Shape ``(..., n_params)``."""
+        """
+        Map parameters from ``[-1, 1]`` to ``[low, high]`` and clip them inside the bounds. Shape ``(..., n_params)``.
+
+        ``-1`` and ``1`` give ``low`` and ``high`` exactly, whatever the dtype: ``mid + half * p`` can miss a float64
+        bound by one ulp, so the interpolation weights both bounds instead.
+        """
+        weight = 0.5 * np.asarray(params_scaled, dtype=np.float64)
+        value = self.low * (0.5 - weight) + self.high * (0.5 + weight)
         # minimum/maximum: np.clip costs several times more on small arrays.
-        return np.minimum(np.maximum(self._mid + self._half * params_scaled, self.low), self.high)
+        return np.minimum(np.maximum(value, self.low), self.high)
 
     def _env_params(self, params_scaled: np.ndarray) -> np.ndarray:
         params = self.unscale(params_scaled)

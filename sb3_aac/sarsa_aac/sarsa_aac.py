@@ -406,7 +406,7 @@ class SarsaAAC(BaseAlgorithm):
         self._td_chunks.clear()
         sums = np.array([len(delta), delta.sum(), np.abs(delta).sum(), delta @ delta, q_error @ q_error, (delta > 0).sum()])
         self._check_weights()  # names the approximators that diverged
-        if not np.isfinite(sums[[1, 2, 3, 5]]).all():
+        if not np.isfinite(sums[1:4]).all():
             self._raise_divergence("the critic's TD error (delta)")
         if not np.isfinite(sums[4]):
             self._raise_divergence("the action-type actor's SARSA error")
