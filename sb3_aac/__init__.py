@@ -2,6 +2,8 @@
 
 import os
 
+from sb3_aac.export import export_policy
+from sb3_aac.runtime import RuntimePolicy
 from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy
 from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction
 
@@ -14,7 +16,9 @@ __all__ = [
     "MlpPolicy",
     "RbfMlpPolicy",
     "RbfPolicy",
+    "RuntimePolicy",
     "SarsaAAC",
     "SarsaAACPolicy",
     "__version__",
+    "export_policy",
 ]

@@ -1,0 +1,129 @@
+"""
+Microseconds per greedy decision on one observation: an exported policy (:class:`sb3_aac.RuntimePolicy`) next to
+``SarsaAAC.predict`` and SB3's ``DQN.predict``, in the same run; and how the exported policy's cost grows with the
+number of RBFs (the paper's O(n), Uc-Cetina 2013 Sec. 4.3).
+
+Every SarsaAAC policy is trained briefly on ``RoboCupDribblePaper-v0`` (the weights' values do not change the
+cost), exported, and loaded twice: with the numba backend (``"auto"`` when numba is installed) and with the
+numpy-only reference. DQN (default ``MlpPolicy``, two hidden layers of 64) acts on the same observation space with
+a ``Discrete`` grid of 4 types x 9 parameter values standing in for the dribbling actions. Each figure is the best
+of ``--repeats`` runs of ``--calls`` decisions, which damps a shared machine's noise; report the load average with
+the numbers.
+
+Usage: ``python benchmarks/runtime_speed.py [--quick] [--calls 5000] [--repeats 5]``
+
+Target (issue 4): <= 10 us per decision for the RBF policy with 10, 30 and 50 RBFs per input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import timeit
+from collections.abc import Callable
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch as th
+from gymnasium import spaces
+from stable_baselines3 import DQN
+
+import robocup_dribble
+from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
+
+ENV_PROFILE = "v11"
+DQN_ACTIONS = 36  # 4 types x 9 parameter values
+
+
+class ObservationOnlyEnv(gym.Env):
+    """The dribbling observation space with a Discrete action grid, just to build a DQN of the right size."""
+
+    def __init__(self, observation_space: spaces.Box):
+        self.observation_space, self.action_space = observation_space, spaces.Discrete(DQN_ACTIONS)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        super().reset(seed=seed)
+        return self.observation_space.sample(), {}
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
+        return self.observation_space.sample(), 0.0, False, False, {}
+
+
+def microseconds(fn: Callable[[], Any], calls: int, repeats: int) -> float:
+    fn()  # warm-up (and numba compilation)
+    return min(timeit.repeat(fn, number=calls, repeat=repeats)) / calls * 1e6
+
+
+def sarsa_model(policy: str, train_steps: int, **policy_kwargs: Any) -> SarsaAAC:
+    env = robocup_dribble.DribbleVecEnv(8, profile=ENV_PROFILE)
+    env.seed(0)
+    return SarsaAAC(policy, env, seed=0, policy_kwargs=policy_kwargs).learn(train_steps)
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer calls, sizes and training steps (a few seconds)")
+    parser.add_argument("--calls", type=int, default=5000, help="decisions per timing run")
+    parser.add_argument("--repeats", type=int, default=5, help="timing runs per figure (the best is reported)")
+    parser.add_argument("--train-steps", type=int, default=2000, help="SarsaAAC training steps before export")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.calls, args.repeats, args.train_steps = min(args.calls, 500), min(args.repeats, 3), min(args.train_steps, 200)
+    th.set_num_threads(1)
+    rng = np.random.default_rng(0)
+    obs_space = robocup_dribble.DribbleEnv(profile=ENV_PROFILE).observation_space
+    obs = rng.uniform(obs_space.low, obs_space.high).astype(np.float32)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"us per decision, one observation (best of {args.repeats} x {args.calls} calls; load average {load:.2f})")
+
+    configs = [("RbfPolicy", {"n_rbf": n}) for n in ((10, 50) if args.quick else (10, 30, 50))]
+    if not args.quick:
+        configs += [("MlpPolicy", {"hidden_units": 2}), ("MlpPolicy", {}), ("RbfMlpPolicy", {})]
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for policy, kwargs in configs:
+            model = sarsa_model(policy, args.train_steps, **kwargs)
+            path = export_policy(model, os.path.join(tmp, "policy.aacp"))
+            fast, reference = RuntimePolicy.load(path), RuntimePolicy.load(path, backend="numpy")
+            label = policy + "".join(f" {k}={v}" for k, v in kwargs.items())
+            rows.append(
+                (
+                    label,
+                    microseconds(lambda r=fast: r.act(obs), args.calls, args.repeats),
+                    microseconds(lambda r=reference: r.act(obs), args.calls, args.repeats),
+                    microseconds(lambda m=model: m.predict(obs, deterministic=True), max(args.calls // 5, 100), args.repeats),
+                    fast.backend,
+                )
+            )
+        dqn = DQN("MlpPolicy", ObservationOnlyEnv(obs_space), seed=0, device="cpu")
+        dqn_us = microseconds(lambda: dqn.predict(obs, deterministic=True), max(args.calls // 5, 100), args.repeats)
+
+        print(f"\n{'policy':32s} {'RuntimePolicy.act':>18s} {'act (numpy only)':>17s} {'SarsaAAC.predict':>17s}")
+        for label, fast_us, numpy_us, predict_us, backend in rows:
+            print(f"{label:32s} {fast_us:13.2f} ({backend}) {numpy_us:17.2f} {predict_us:17.2f}")
+        print(f"{'SB3 DQN.predict (MLP 64x64)':32s} {'':18s} {'':17s} {dqn_us:17.2f}")
+
+        sizes = (5, 10, 25, 50, 100) if args.quick else (5, 10, 20, 30, 50, 100, 200)
+        print("\nScaling with the number of RBFs (RbfPolicy; n = 10 inputs x RBFs per input features per approximator)")
+        print(f"{'RBFs/input':>10s} {'n':>6s} {'act us':>8s} {'numpy us':>9s}")
+        features, costs = [], []
+        for n_rbf in sizes:
+            model = sarsa_model("RbfPolicy", 0 if args.quick else 200, n_rbf=n_rbf)
+            path = export_policy(model, os.path.join(tmp, "policy.aacp"))
+            fast, reference = RuntimePolicy.load(path), RuntimePolicy.load(path, backend="numpy")
+            fast_us = microseconds(lambda r=fast: r.act(obs), args.calls, args.repeats)
+            numpy_us = microseconds(lambda r=reference: r.act(obs), args.calls, args.repeats)
+            n = obs_space.shape[0] * n_rbf
+            features.append(n)
+            costs.append(fast_us)
+            print(f"{n_rbf:10d} {n:6d} {fast_us:8.2f} {numpy_us:9.2f}")
+        slope, intercept = np.polyfit(features, costs, 1)
+        fitted = np.polyval([slope, intercept], features)
+        r2 = 1 - np.sum((np.array(costs) - fitted) ** 2) / np.sum((np.array(costs) - np.mean(costs)) ** 2)
+        print(f"linear fit of act: {intercept:.2f} us + {1000 * slope:.2f} ns x n   (R^2 = {r2:.3f}; O(n) if close to 1)")
+
+
+if __name__ == "__main__":
+    main()

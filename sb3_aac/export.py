@@ -1,0 +1,155 @@
+"""
+Export a trained SarsaAAC policy for a runtime without torch or Stable-Baselines3 (a RoboCup agent, a C++ program).
+
+The file holds plain float64 arrays and a JSON description, never pickled objects; see ``docs/export-format.md``
+and :class:`sb3_aac.runtime.RuntimePolicy`, which reads it with numpy alone::
+
+    from sb3_aac import SarsaAAC, export_policy, RuntimePolicy
+
+    model = SarsaAAC.load("model.zip")
+    export_policy(model, "dribbler.aacp")
+    action_type, params = RuntimePolicy.load("dribbler.aacp").act(obs)
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sb3_aac.runtime import ALIGNMENT, ARRAY_DTYPE, FORMAT_NAME, FORMAT_VERSION, MAGIC, PREAMBLE, expected_array_shapes, read_policy_file
+
+DEFAULT_SUFFIX = ".aacp"
+
+
+def _policy_of(model: Any) -> Any:
+    from sb3_aac.sarsa_aac.policies import SarsaAACPolicy
+
+    policy = getattr(model, "policy", model)
+    if not isinstance(policy, SarsaAACPolicy):
+        raise ValueError(f"export_policy needs a SarsaAAC model or a SarsaAACPolicy, got {type(model).__name__}")
+    return policy
+
+
+def policy_arrays(policy: Any) -> dict[str, np.ndarray]:
+    """The arrays of the file format, as float64 numpy arrays, from a :class:`SarsaAACPolicy`."""
+    bank = policy.approximators
+    d = bank.n_inputs
+    space = policy.observation_space
+    arrays = {
+        "obs_low": np.broadcast_to(np.asarray(space.low, dtype=np.float64).ravel(), (d,)),
+        "obs_high": np.broadcast_to(np.asarray(space.high, dtype=np.float64).ravel(), (d,)),
+        "obs_mid": bank.obs_mid,
+        "obs_half": bank.obs_half,
+        "param_low": policy.spec.low,
+        "param_high": policy.spec.high,
+    }
+    names = ["rbf_centers", "rbf_widths"] if bank.n_rbf is not None else []
+    names += ["weight", "bias"] if bank.hidden_units is None else ["weight1", "bias1", "weight2", "bias2"]
+    for name in names:
+        arrays[name] = getattr(bank, name)
+    return {
+        name: np.ascontiguousarray((v.detach().cpu().numpy() if hasattr(v, "detach") else np.asarray(v)).astype(ARRAY_DTYPE))
+        for name, v in arrays.items()
+    }
+
+
+def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The JSON header (without the arrays table) describing a :class:`SarsaAACPolicy`."""
+    from sb3_aac import __version__
+
+    bank, spec = policy.approximators, policy.spec
+    k, n_params = spec.n_types, spec.n_params
+    return {
+        "format": FORMAT_NAME,
+        "version": FORMAT_VERSION,
+        "writer": f"sb3-aac {__version__}",
+        "algorithm": "SarsaAAC",
+        "policy_class": type(policy).__name__,
+        "observation": {
+            "shape": [int(s) for s in policy.observation_space.shape],
+            "size": int(bank.n_inputs),
+            "dtype": str(policy.observation_space.dtype),
+        },
+        "action": {
+            "layout": spec.layout,
+            "n_types": k,
+            "type_start": spec.start,
+            "n_params": n_params,
+            "types": [
+                {"dim": dim, "shape": [int(s) for s in box.shape], "dtype": str(box.dtype), "offset": spec.offsets[j]}
+                for j, (dim, box) in enumerate(zip(spec.dims, spec.boxes, strict=True))
+            ],
+        },
+        "approximators": {
+            "n_outputs": k + n_params + 1,
+            "outputs": {"q": [0, k], "params": [k, k + n_params], "value": k + n_params},
+            "features": (
+                {"type": "scaled", "n_features": bank.n_features}
+                if bank.n_rbf is None
+                else {"type": "rbf", "n_rbf": bank.n_rbf, "rbf_width": float(policy.rbf_width), "n_features": bank.n_features}
+            ),
+            "head": {"type": "linear"} if bank.hidden_units is None else {"type": "tanh_mlp", "hidden_units": bank.hidden_units},
+        },
+        "metadata": dict(metadata or {}),
+    }
+
+
+def encode_policy_file(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> bytes:
+    """
+    Lay out a header and its arrays as file bytes: preamble, JSON header (space-padded to 8 bytes), blob, SHA-256.
+
+    The header's ``arrays`` table and ``blob_size`` are filled in here.
+    """
+    table, chunks, offset = {}, [], 0
+    for name, array in arrays.items():
+        data = np.ascontiguousarray(array, dtype=ARRAY_DTYPE).tobytes()
+        table[name] = {"dtype": ARRAY_DTYPE, "shape": list(array.shape), "offset": offset, "nbytes": len(data)}
+        chunks.append(data)
+        offset += len(data)  # float64 arrays keep every offset a multiple of 8
+    header = {**header, "arrays": table, "blob_size": offset}
+    text = json.dumps(header, indent=1, allow_nan=False).encode("utf-8")
+    text += b" " * (-(PREAMBLE.size + len(text)) % ALIGNMENT)
+    body = PREAMBLE.pack(MAGIC, len(text)) + text + b"".join(chunks)
+    return body + hashlib.sha256(body).digest()
+
+
+def export_policy(model: Any, path: str | os.PathLike, metadata: dict[str, Any] | None = None) -> Path:
+    """
+    Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy`` v1).
+
+    :param model: a :class:`sb3_aac.SarsaAAC` model, or its policy
+    :param path: where to write; ``.aacp`` is appended when the name has no suffix
+    :param metadata: JSON-serialisable extras stored in the header (e.g. ``{"env_id": "RoboCupDribble-v0"}``)
+    :return: the path written. The file is written to a temporary name, re-read and checked with
+        :func:`sb3_aac.runtime.read_policy_file`, then renamed into place.
+    """
+    policy = _policy_of(model)
+    path = Path(path)
+    if path.suffix == "":
+        path = path.with_suffix(DEFAULT_SUFFIX)
+    meta = dict(metadata or {})
+    num_timesteps = getattr(model, "num_timesteps", None)
+    if num_timesteps is not None:
+        meta.setdefault("num_timesteps", int(num_timesteps))
+    header = policy_header(policy, meta)
+    arrays = policy_arrays(policy)
+    assert {name: a.shape for name, a in arrays.items()} == expected_array_shapes({**header, "arrays": {}}), "writer/reader disagree"
+    try:
+        data = encode_policy_file(header, arrays)
+    except ValueError as error:  # allow_nan=False: a NaN in the metadata
+        raise ValueError(f"metadata must be JSON-serialisable without NaN/inf: {error}") from error
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_bytes(data)
+    try:
+        read_policy_file(tmp)
+    except Exception:
+        tmp.unlink()
+        raise
+    os.replace(tmp, path)
+    return path

@@ -1,0 +1,553 @@
+"""
+Greedy SarsaAAC decisions from an exported policy file, with numpy alone.
+
+:func:`sb3_aac.export_policy` writes a trained policy as plain arrays and a JSON description (format
+``sb3-aac-policy`` version 1, see ``docs/export-format.md``); :class:`RuntimePolicy` reads it back and acts::
+
+    from sb3_aac.runtime import RuntimePolicy
+
+    policy = RuntimePolicy.load("dribbler.aacp")
+    action_type, params = policy.act(observation)  # params of that type, in the env's units
+
+This module imports only the standard library and numpy (no torch, no Stable-Baselines3), so it can be copied
+into an agent on its own. Loading never executes anything from the file: it checks the magic bytes, a SHA-256
+over the whole file, the format version, and the name, dtype, shape and placement of every array, and raises a
+:class:`ValueError` saying what is wrong rather than ever returning an action from a damaged file.
+
+The arithmetic mirrors the training code's numpy kernel (:class:`sb3_aac.common.approximators.BankKernel`), so the
+decisions are those of ``model.predict(obs, deterministic=True)``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import struct
+from typing import Any
+
+import numpy as np
+
+FORMAT_NAME = "sb3-aac-policy"
+FORMAT_VERSION = 1
+SUPPORTED_VERSIONS = (1,)
+MAGIC = b"SB3AACP\x00"  # 8 bytes
+PREAMBLE = struct.Struct("<8sQ")  # magic, header length (bytes)
+DIGEST_SIZE = 32  # the file ends with the SHA-256 of everything before it
+ALIGNMENT = 8  # the blob and every array start at a multiple of 8 bytes
+LAYOUTS = ("nested", "flat", "shared", "oneof")
+BACKENDS = ("auto", "numpy", "numba")  # how act() computes: numba if importable, or numpy only
+PARAM_DTYPES = ("float16", "float32", "float64")
+ARRAY_DTYPE = "<f8"  # every array: little-endian IEEE-754 float64, C order
+
+__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "MAGIC", "RuntimePolicy", "expected_array_shapes", "read_policy_file"]
+
+
+def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
+    """The arrays a version-1 file must hold, with their shapes, given its (checked) header."""
+    d = header["observation"]["size"]
+    n_params = header["action"]["n_params"]
+    approx = header["approximators"]
+    a, f = approx["n_outputs"], approx["features"]["n_features"]
+    shapes: dict[str, tuple[int, ...]] = {
+        "obs_low": (d,),
+        "obs_high": (d,),
+        "obs_mid": (d,),
+        "obs_half": (d,),
+        "param_low": (n_params,),
+        "param_high": (n_params,),
+    }
+    if approx["features"]["type"] == "rbf":
+        m = approx["features"]["n_rbf"]
+        shapes["rbf_centers"] = shapes["rbf_widths"] = (d, m)
+    if approx["head"]["type"] == "linear":
+        shapes.update(weight=(a, f), bias=(a,))
+    else:
+        h = approx["head"]["hidden_units"]
+        shapes.update(weight1=(a, h, f), bias1=(a, h), weight2=(a, h), bias2=(a,))
+    return shapes
+
+
+def _fail(path: Any, why: str) -> ValueError:
+    return ValueError(f"{path} is not a usable sb3-aac policy file: {why}")
+
+
+def _positive_int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 1
+
+
+def _check_header(header: Any, path: Any) -> None:
+    """Structure and consistency of a version-1 header (everything but the arrays)."""
+    try:
+        obs, action, approx = header["observation"], header["action"], header["approximators"]
+        d, shape = obs["size"], obs["shape"]
+        if not (_positive_int(d) and isinstance(shape, list) and all(_positive_int(s) for s in shape) and math.prod(shape) == d):
+            raise _fail(path, f"observation size {d} and shape {shape} disagree")
+        k, start, layout, types = action["n_types"], action["type_start"], action["layout"], action["types"]
+        if layout not in LAYOUTS:
+            raise _fail(path, f"unknown action layout {layout!r} (known: {list(LAYOUTS)})")
+        if not (_positive_int(k) and isinstance(start, int) and isinstance(types, list) and len(types) == k):
+            raise _fail(path, f"action section declares n_types={k!r} with {len(types)} type entries")
+        offset = 0
+        for j, t in enumerate(types):
+            dim, tshape = t["dim"], t["shape"]
+            if not (isinstance(dim, int) and dim >= 0 and isinstance(tshape, list) and math.prod(tshape) == dim):
+                raise _fail(path, f"action type {j}: dim {dim!r} and shape {tshape!r} disagree")
+            if t["offset"] != offset:
+                raise _fail(path, f"action type {j}: offset {t['offset']!r}, expected {offset}")
+            if t["dtype"] not in PARAM_DTYPES:
+                raise _fail(path, f"action type {j}: parameter dtype {t['dtype']!r} is not one of {list(PARAM_DTYPES)}")
+            offset += dim
+        if action["n_params"] != offset:
+            raise _fail(path, f"n_params is {action['n_params']!r} but the types' dims add up to {offset}")
+        features, head = approx["features"], approx["head"]
+        if features["type"] == "rbf":
+            if not _positive_int(features["n_rbf"]) or features["n_features"] != d * features["n_rbf"]:
+                raise _fail(path, f"RBF features: n_rbf={features['n_rbf']!r}, n_features={features['n_features']!r}, {d} inputs")
+        elif features["type"] == "scaled":
+            if features["n_features"] != d:
+                raise _fail(path, f"scaled features: n_features={features['n_features']!r} for {d} inputs")
+        else:
+            raise _fail(path, f"unknown feature type {features['type']!r} (known: 'rbf', 'scaled')")
+        if head["type"] == "tanh_mlp":
+            if not _positive_int(head["hidden_units"]):
+                raise _fail(path, f"hidden_units={head['hidden_units']!r}")
+        elif head["type"] != "linear":
+            raise _fail(path, f"unknown head type {head['type']!r} (known: 'linear', 'tanh_mlp')")
+        outputs = approx["outputs"]
+        expected = {"q": [0, k], "params": [k, k + offset], "value": k + offset}
+        if approx["n_outputs"] != k + offset + 1 or outputs != expected:
+            raise _fail(path, f"approximator outputs {outputs!r} (n_outputs={approx['n_outputs']!r}); expected {expected}")
+        if not isinstance(header["arrays"], dict) or not _positive_int(header["blob_size"]):
+            raise _fail(path, "the arrays table or blob_size is malformed")
+    except (KeyError, TypeError) as error:
+        raise _fail(path, f"the header lacks or mistypes a required field ({error!r})") from error
+
+
+def read_policy_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """
+    Read and verify a policy file.
+
+    :return: the JSON header and the arrays (read-only float64 views of one buffer)
+    :raises ValueError: for a file that is not a complete, unaltered version-1 policy file
+    :raises FileNotFoundError: if there is no such file
+    """
+    with open(path, "rb") as f:
+        data = f.read()
+    if len(data) < PREAMBLE.size + DIGEST_SIZE:
+        raise _fail(path, f"only {len(data)} bytes (truncated?)")
+    magic, header_len = PREAMBLE.unpack_from(data)
+    if magic != MAGIC:
+        raise _fail(path, f"it does not start with the magic bytes {MAGIC!r} (got {magic!r}); export one with sb3_aac.export_policy")
+    if hashlib.sha256(data[:-DIGEST_SIZE]).digest() != data[-DIGEST_SIZE:]:
+        raise _fail(path, "SHA-256 checksum mismatch: the file is truncated, corrupted or was altered; export it again")
+    blob_start = PREAMBLE.size + header_len
+    if blob_start > len(data) - DIGEST_SIZE or blob_start % ALIGNMENT:
+        raise _fail(path, f"header length {header_len} does not fit the file of {len(data)} bytes")
+    try:
+        header = json.loads(data[PREAMBLE.size : blob_start].decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise _fail(path, f"the header is not UTF-8 JSON ({error})") from error
+    if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
+        raise _fail(path, f"format is {header.get('format') if isinstance(header, dict) else None!r}, expected {FORMAT_NAME!r}")
+    version = header.get("version")
+    if version not in SUPPORTED_VERSIONS:
+        raise _fail(
+            path,
+            f"unknown format version {version!r}; this reader supports {list(SUPPORTED_VERSIONS)} "
+            "(a newer sb3-aac wrote it? upgrade sb3-aac, or export with this version)",
+        )
+    _check_header(header, path)
+    blob = memoryview(data)[blob_start : len(data) - DIGEST_SIZE]
+    if header["blob_size"] != len(blob):
+        raise _fail(path, f"the header announces {header['blob_size']} bytes of arrays, the file holds {len(blob)}")
+    arrays = {}
+    table = header["arrays"]
+    for name, shape in expected_array_shapes(header).items():
+        entry = table.get(name)
+        if not isinstance(entry, dict):
+            raise _fail(path, f"missing array {name!r} (present: {sorted(table)})")
+        try:
+            offset, nbytes = entry["offset"], entry["nbytes"]
+            dtype, stored_shape = entry["dtype"], tuple(entry["shape"])
+        except (KeyError, TypeError) as error:
+            raise _fail(path, f"array {name!r}: malformed entry {entry!r}") from error
+        if dtype != ARRAY_DTYPE:
+            raise _fail(path, f"array {name!r} has dtype {dtype!r}, version 1 stores every array as {ARRAY_DTYPE!r}")
+        if stored_shape != shape:
+            raise _fail(path, f"array {name!r} has shape {stored_shape}, the header's sizes need {shape}")
+        size = 8 * math.prod(shape)
+        if not (isinstance(offset, int) and offset >= 0 and offset % ALIGNMENT == 0 and nbytes == size and offset + size <= len(blob)):
+            raise _fail(path, f"array {name!r}: offset {offset!r} / nbytes {nbytes!r} do not fit the {len(blob)}-byte blob")
+        arrays[name] = np.frombuffer(blob, dtype=ARRAY_DTYPE, count=math.prod(shape), offset=offset).reshape(shape)
+    return header, arrays
+
+
+def _compile_act_kernel() -> Any:
+    """
+    A numba-compiled ``act`` (features, every output, argmax, unscale) for one observation, or None without numba.
+
+    Optional: the runtime needs only numpy; numba (a dependency of sb3-aac) removes numpy's per-call overhead,
+    about a microsecond for each of the dozen array operations of a decision. Sums run in a different order than
+    numpy's BLAS, so outputs can differ from the numpy path in the last bit; the decisions are the same except
+    for exact ties of that size.
+    """
+    try:
+        import numba
+    except ImportError:
+        return None
+
+    # reassoc lets LLVM vectorise the dot products (their order differs from numpy's BLAS anyway); no nnan/ninf,
+    # so the finiteness check stays valid.
+    @numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
+    def act_kernel(x, pack, meta, phi, params):  # pragma: no cover
+        # Few arguments: numba's dispatch costs about as much per argument as a small loop iteration does.
+        # meta: d, m (RBFs per input, 0: scaled inputs), F, H (0: linear head), K, 7 segment starts in pack,
+        # then the K + 1 parameter offsets. pack: feature constants a, b; weights w (or w1), biases b (or b1),
+        # w2, b2 (MLP head); parameter low, high.
+        d, m, n_features, h, n_types = meta[0], meta[1], meta[2], meta[3], meta[4]
+        fa, fb, pw, pb, pw2, pb2, plow = meta[5], meta[6], meta[7], meta[8], meta[9], meta[10], meta[11]
+        total = 0.0
+        for i in range(d):
+            total += x[i] * x[i]
+        if not np.isfinite(total):
+            return -1, 0
+        if m > 0:
+            for i in range(d):
+                for j in range(m):
+                    z = x[i] * pack[fa + i * m + j] - pack[fb + i * m + j]
+                    phi[i * m + j] = np.exp(-(z * z))
+        else:
+            for i in range(d):
+                phi[i] = x[i] * pack[fa + i] - pack[fb + i]
+
+        def output(a):
+            if h > 0:
+                acc = 0.0
+                for u in range(h):
+                    row = a * h + u
+                    s = 0.0
+                    for f in range(n_features):
+                        s += pack[pw + row * n_features + f] * phi[f]
+                    acc += np.tanh(s + pack[pb + row]) * pack[pw2 + row]
+                return acc + pack[pb2 + a]
+            s = 0.0
+            for f in range(n_features):
+                s += pack[pw + a * n_features + f] * phi[f]
+            return s + pack[pb + a]
+
+        k, best = 0, output(0)
+        for a in range(1, n_types):
+            q = output(a)
+            if q > best:
+                k, best = a, q
+        start, dim = meta[12 + k], meta[13 + k] - meta[12 + k]
+        n_params = meta[12 + n_types]
+        for j in range(dim):
+            weight = 0.5 * output(n_types + start + j)
+            lo, hi = pack[plow + start + j], pack[plow + n_params + start + j]
+            params[j] = min(max(lo * (0.5 - weight) + hi * (0.5 + weight), lo), hi)
+        return k, dim
+
+    return act_kernel
+
+
+_ACT_KERNEL: Any = False  # compiled on first use
+
+
+def _act_kernel() -> Any:
+    global _ACT_KERNEL
+    if _ACT_KERNEL is False:
+        _ACT_KERNEL = _compile_act_kernel()
+    return _ACT_KERNEL
+
+
+class RuntimePolicy:
+    """
+    A SarsaAAC policy read from an exported file: greedy decisions with numpy only.
+
+    ``act`` follows the paper's decision procedure (Uc-Cetina 2013, Sec. 4.3): the K action-type values, their
+    maximum, then the parameters of the chosen type only, so one decision costs ``O(n)`` in the number of
+    features. Use :meth:`load` to build one.
+
+    :ivar n_types: number of action types K
+    :ivar type_start: the env's number for type 0 (``Discrete.start``; 0 for ``OneOf``)
+    :ivar obs_shape: the observation shape the policy was trained on
+    :ivar header: the file's JSON header (a dict)
+    """
+
+    def __init__(self, header: dict[str, Any], arrays: dict[str, np.ndarray], path: Any = "<memory>", backend: str = "auto"):
+        if backend not in BACKENDS:
+            raise ValueError(f"Unknown backend {backend!r}, choose one of {list(BACKENDS)}")
+        self.header, self.path = header, path
+        obs, action, approx = header["observation"], header["action"], header["approximators"]
+        self.obs_shape = tuple(obs["shape"])
+        self.obs_size = obs["size"]
+        self.layout, self.n_types, self.type_start = action["layout"], action["n_types"], action["type_start"]
+        types = action["types"]
+        self.dims = tuple(t["dim"] for t in types)
+        self.offsets = (*(t["offset"] for t in types), action["n_params"])
+        self.param_shapes = tuple(tuple(t["shape"]) for t in types)
+        self.param_dtypes = tuple(np.dtype(t["dtype"]) for t in types)
+        self.n_params = action["n_params"]
+        self.obs_low, self.obs_high = arrays["obs_low"], arrays["obs_high"]
+        self.param_low, self.param_high = arrays["param_low"], arrays["param_high"]
+        for name, values in arrays.items():
+            if name in ("obs_low", "obs_high"):
+                if np.isnan(values).any():
+                    raise _fail(path, f"array {name!r} holds NaN")
+            elif not np.isfinite(values).all():
+                raise _fail(path, f"array {name!r} holds NaN or inf values")
+        if not (arrays["obs_half"] > 0).all():
+            raise _fail(path, "obs_half must be > 0 everywhere")
+        if not (self.param_low <= self.param_high).all():
+            raise _fail(path, "param_low must be <= param_high everywhere")
+
+        # Derived constants, computed exactly as BankKernel computes them.
+        scale = 1.0 / arrays["obs_half"]
+        shift = arrays["obs_mid"] * scale
+        self.rbf = approx["features"]["type"] == "rbf"
+        if self.rbf:
+            if not (arrays["rbf_widths"] > 0).all():
+                raise _fail(path, "rbf_widths must be > 0 everywhere")
+            inv_w = np.sqrt(0.5) / arrays["rbf_widths"]
+            self._rbf_a = scale[:, None] * inv_w
+            self._rbf_b = (shift[:, None] + arrays["rbf_centers"]) * inv_w
+        else:
+            self._scale, self._shift = scale, shift
+        self.mlp = approx["head"]["type"] == "tanh_mlp"
+        k, p, a = self.n_types, self.n_params, approx["n_outputs"]
+        if self.mlp:
+            h = self.hidden_units = approx["head"]["hidden_units"]
+            w1, b1, w2, b2 = arrays["weight1"], arrays["bias1"], arrays["weight2"], arrays["bias2"]
+            self._w1_flat = np.ascontiguousarray(w1.reshape(a * h, -1))
+            self._b1_flat = b1.reshape(-1).copy()
+            self._w2, self._b2 = w2.copy(), b2.copy()
+            self._w1_q, self._b1_q = self._w1_flat[: k * h], self._b1_flat[: k * h]
+            self._w2_q, self._b2_q = self._w2[:k], self._b2[:k]
+            # Per type: its parameter approximators' hidden layers, output weights and biases.
+            self._param_heads = []
+            for j in range(k):
+                lo, hi = k + self.offsets[j], k + self.offsets[j + 1]
+                self._param_heads.append((self._w1_flat[lo * h : hi * h], self._b1_flat[lo * h : hi * h], self._w2[lo:hi], self._b2[lo:hi]))
+        else:
+            self.hidden_units = None
+            self._w, self._b = np.ascontiguousarray(arrays["weight"]), arrays["bias"].copy()
+            self._w_q, self._b_q = self._w[:k], self._b[:k]
+            self._param_heads = [
+                (self._w[k + self.offsets[j] : k + self.offsets[j + 1]], self._b[k + self.offsets[j] : k + self.offsets[j + 1]])
+                for j in range(k)
+            ]
+        self._p_slice = slice(k, k + p)
+        # Per type: slices of the parameter bounds, as float64 arrays.
+        self._bounds = [(self.param_low[s], self.param_high[s]) for s in (self.type_slice(j) for j in range(k))]
+        self._bounds_lists = [(low.tolist(), high.tolist()) for low, high in self._bounds]
+        n_features = approx["features"]["n_features"]
+        self._phi = np.empty(n_features)
+        self._z = self._phi.reshape(self.obs_size, -1)
+        self._kernel_args: tuple | None = None
+        if backend != "numpy":
+            kernel = _act_kernel()
+            if kernel is None and backend == "numba":
+                raise ValueError("backend='numba' needs numba (pip install numba); use backend='numpy' or 'auto'")
+            if kernel is not None:
+                if self.rbf:
+                    segments = [self._rbf_a, self._rbf_b]
+                else:
+                    segments = [self._scale, self._shift]
+                if self.mlp:
+                    segments += [self._w1_flat, self._b1_flat, self._w2, self._b2]
+                else:
+                    segments += [self._w, self._b, np.zeros(0), np.zeros(0)]
+                segments += [self.param_low, self.param_high]
+                starts = np.cumsum([0] + [seg.size for seg in segments])[:-1]
+                sizes = [self.obs_size, approx["features"].get("n_rbf", 0) if self.rbf else 0, n_features, self.hidden_units or 0, k]
+                meta = np.array([*sizes, *starts[:7], *self.offsets], dtype=np.int64)
+                pack = np.concatenate([seg.ravel() for seg in segments])
+                self._kernel = kernel
+                self._kernel_args = (pack, meta, self._phi, np.empty(max(self.dims)))
+        self.backend = "numpy" if self._kernel_args is None else "numba"
+
+    # ------------------------------------------------------------------ loading
+
+    @classmethod
+    def load(cls, path: str | os.PathLike, backend: str = "auto") -> RuntimePolicy:
+        """
+        Read a policy file written by :func:`sb3_aac.export_policy`.
+
+        :param backend: how :meth:`act` computes: ``"numpy"`` (the reference: the training kernel's operations),
+            ``"numba"`` (compiled, several times faster on one observation), or ``"auto"`` (numba when it can be
+            imported). Batched methods always use numpy.
+
+        :raises ValueError: naming what is wrong, for a truncated, corrupted, altered or unsupported file
+        :raises FileNotFoundError: if there is no such file
+        """
+        header, arrays = read_policy_file(path)
+        return cls(header, arrays, path, backend)
+
+    def __repr__(self) -> str:
+        approx = self.header["approximators"]
+        return (
+            f"RuntimePolicy({self.path!s}: {self.header.get('policy_class')}, {self.obs_size} inputs, "
+            f"{approx['features']['n_features']} features, head {approx['head']}, {self.n_types} action types, "
+            f"dims {list(self.dims)}, layout {self.layout!r})"
+        )
+
+    def type_slice(self, k: int) -> slice:
+        """Columns of 0-based type ``k``'s parameters in the concatenated parameter vector."""
+        return slice(self.offsets[k], self.offsets[k + 1])
+
+    # ------------------------------------------------------------------ one observation
+
+    def _observation(self, obs: Any) -> np.ndarray:
+        x = np.asarray(obs, dtype=np.float64)
+        if x.shape != self.obs_shape and x.shape != (self.obs_size,):
+            raise ValueError(
+                f"Expected one observation of shape {self.obs_shape} ({self.obs_size} values), got shape {x.shape}; "
+                "use act_batch for a batch"
+            )
+        x = x.reshape(-1)
+        if not math.isfinite(np.dot(x, x)):  # one reduction: NaN and inf (and absurd magnitudes) reach the sum
+            raise ValueError(f"The observation holds NaN or inf values: {x}")
+        return x
+
+    def _features(self, x: np.ndarray) -> np.ndarray:
+        """The feature vector ``(F,)`` of one observation, in a buffer reused by the next call."""
+        if not self.rbf:
+            phi = self._phi
+            np.multiply(x, self._scale, out=phi)
+            return np.subtract(phi, self._shift, out=phi)
+        z = self._z  # (D, m) view of the (F,) buffer: exp(-(x_i * a_ij - b_ij)**2), as the kernel computes it
+        np.multiply(x[:, None], self._rbf_a, out=z)
+        np.subtract(z, self._rbf_b, out=z)
+        np.multiply(z, z, out=z)
+        np.negative(z, out=z)
+        return np.exp(self._phi, out=self._phi)
+
+    def act(self, obs: Any) -> tuple[int, np.ndarray]:
+        """
+        The greedy decision for one observation.
+
+        Not thread-safe (it reuses internal buffers): give each thread its own ``RuntimePolicy``.
+
+        :param obs: one observation, of the trained shape or flat
+        :return: the action type as the env numbers it (``type_start + k``) and that type's parameters in the
+            env's units, clipped to its bounds: a flat array of ``dims[k]`` values in its Box's dtype
+        :raises ValueError: for a wrong observation size or non-finite values
+        """
+        if self._kernel_args is not None:
+            x = np.asarray(obs, dtype=np.float64)
+            if x.shape != self.obs_shape and x.shape != (self.obs_size,):
+                self._observation(x)  # raises the shape error
+            k, dim = self._kernel(x.reshape(-1), *self._kernel_args)
+            if k < 0:
+                raise ValueError(f"The observation holds NaN or inf values: {x}")
+            return self.type_start + k, self._kernel_args[-1][:dim].astype(self.param_dtypes[k])
+        phi = self._features(self._observation(obs))
+        # Every output at once: with numpy, one matrix-vector product costs less than separate calls for Q and
+        # for the chosen type's parameters (a C++ runtime would compute only those, see docs/export-format.md).
+        if self.mlp:
+            hidden = np.tanh(np.dot(self._w1_flat, phi) + self._b1_flat).reshape(self._w2.shape)
+            out = ((hidden * self._w2).sum(1) + self._b2).tolist()
+        else:
+            out = (np.dot(self._w, phi) + self._b).tolist()
+        q = out[: self.n_types]
+        k = q.index(max(q))  # the first maximum, like numpy's argmax
+        # Unscale in Python floats: the same IEEE operations as unscale(), cheaper on a few values.
+        values = []
+        start = self.n_types + self.offsets[k]
+        for scaled, low, high in zip(out[start : start + self.dims[k]], *self._bounds_lists[k]):
+            weight = 0.5 * scaled
+            values.append(min(max(low * (0.5 - weight) + high * (0.5 + weight), low), high))
+        return self.type_start + k, np.array(values, dtype=self.param_dtypes[k])
+
+    def __call__(self, obs: Any) -> tuple[int, np.ndarray]:
+        return self.act(obs)
+
+    # ------------------------------------------------------------------ batches
+
+    def _batch(self, obs: Any) -> np.ndarray:
+        x = np.asarray(obs, dtype=np.float64)
+        if x.ndim < 1 or (x.shape[1:] != self.obs_shape and x.shape[1:] != (self.obs_size,)):
+            raise ValueError(
+                f"Expected a batch of observations of shape (n, {', '.join(map(str, self.obs_shape))}) "
+                f"or (n, {self.obs_size}), got shape {x.shape}"
+            )
+        x = x.reshape(len(x), -1)
+        if not np.isfinite(x).all():
+            rows = np.flatnonzero(~np.isfinite(x).all(1))
+            raise ValueError(f"Observation(s) {rows[:10].tolist()} of the batch hold NaN or inf values")
+        return x
+
+    def outputs(self, obs: Any) -> np.ndarray:
+        """
+        Every approximator's output for a batch ``(n, D)``: ``(n, A)`` columns Q (K), scaled parameters
+        (n_params), value V (1).
+        """
+        x = self._batch(obs)
+        if not self.rbf:
+            phi = x * self._scale - self._shift
+        else:
+            z = x[:, :, None] * self._rbf_a - self._rbf_b
+            phi = np.exp(-(z * z)).reshape(len(x), -1)
+        if not self.mlp:
+            return phi @ self._w.T + self._b
+        hidden = np.tanh(phi @ self._w1_flat.T + self._b1_flat).reshape(len(x), *self._w2.shape)
+        return (hidden * self._w2).sum(2) + self._b2
+
+    def unscale(self, params_scaled: np.ndarray) -> np.ndarray:
+        """Scaled parameters ``(..., n_params)`` in ``[-1, 1]`` -> env units, clipped to the bounds (float64)."""
+        weight = 0.5 * np.asarray(params_scaled, dtype=np.float64)
+        value = self.param_low * (0.5 - weight) + self.param_high * (0.5 + weight)
+        return np.minimum(np.maximum(value, self.param_low), self.param_high)
+
+    def act_batch(self, obs: Any) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Greedy decisions for a batch of observations.
+
+        :return: action types ``(n,)`` (int64, numbered as the env numbers them) and the parameters ``(n, n_params)``
+            (float64, env units, clipped) of *every* type; observation ``i``'s chosen parameters are
+            ``params[i, policy.type_slice(types[i] - policy.type_start)]``
+        """
+        out = self.outputs(obs)
+        k = out[:, : self.n_types].argmax(1)
+        return k + self.type_start, self.unscale(out[:, self._p_slice])
+
+    def value(self, obs: Any) -> np.ndarray:
+        """The critic's state values ``V(s)`` for a batch ``(n,)``."""
+        return self.outputs(obs)[:, -1]
+
+    # ------------------------------------------------------------------ SB3-style predict
+
+    def _env_action(self, k: int, params: np.ndarray) -> tuple:
+        """One env action in the file's layout, as ``model.predict`` builds it (0-based ``k``)."""
+
+        def box(j: int) -> np.ndarray:
+            return params[self.type_slice(j)].astype(self.param_dtypes[j]).reshape(self.param_shapes[j])
+
+        if self.layout == "oneof":
+            return (k, box(k))
+        if self.layout == "shared":
+            return (self.type_start + k, box(k))
+        values = tuple(box(j) for j in range(self.n_types))
+        return (self.type_start + k, values) if self.layout == "nested" else (self.type_start + k, *values)
+
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True) -> tuple[Any, Any]:
+        """
+        The SB3 ``predict`` interface (greedy; ``deterministic`` is ignored), so evaluation code written for a
+        model takes a ``RuntimePolicy`` too.
+
+        :return: one env action (a tuple in the action space's layout) for one observation, or an object array of
+            them for a batch; and ``state``
+        """
+        x = np.asarray(observation, dtype=np.float64)
+        single = x.shape == self.obs_shape
+        types, params = self.act_batch(x[None] if single else x)
+        types = types - self.type_start
+        if single:
+            return self._env_action(int(types[0]), params[0]), state
+        actions = np.empty(len(types), dtype=object)
+        for i in range(len(types)):
+            actions[i] = self._env_action(int(types[i]), params[i])
+        return actions, state

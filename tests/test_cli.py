@@ -1,0 +1,165 @@
+"""The sb3-aac command line, in-process through sb3_aac.cli.main on tiny budgets."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sb3_aac.cli import main
+
+
+def run_error(capsys, argv: list[str]) -> str:
+    """Run a failing command: exit status 2, no traceback; returns stderr."""
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    return err
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("run")
+    assert main(["train", "--timesteps", "600", "--n-envs", "4", "--seed", "1", "--out", str(out), "--eval-episodes", "20",
+                 "--set", "n_rbf=5", "--set", "gamma=0.8", "--set", "type_exploration=boltzmann"]) == 0  # fmt: skip
+    return out
+
+
+def test_train_saves_and_evaluates(trained: Path, capsys) -> None:
+    from sb3_aac import RuntimePolicy, SarsaAAC
+
+    model = SarsaAAC.load(trained / "model.zip")
+    assert model.gamma == 0.8 and model.type_exploration == "boltzmann" and model.policy.n_rbf == 5
+    assert RuntimePolicy.load(trained / "policy.aacp").header["metadata"]["env_id"] == "RoboCupDribblePaper-v0"
+    run = json.loads((trained / "run.json").read_text())
+    assert run["env_id"] == "RoboCupDribblePaper-v0" and run["policy"] == "RbfPolicy" and run["seed"] == 1
+
+
+def test_train_episodes_tensorboard_other_env(tmp_path: Path, capsys) -> None:
+    assert main(["train", "--episodes", "30", "--n-envs", "2", "--eval-episodes", "10", "--tensorboard", str(tmp_path / "tb")]) == 0
+    out = capsys.readouterr().out
+    assert "30 episodes" in out and "mean distance" in out and "share >= 20 m" in out and "ball-loss rate" in out
+    assert list((tmp_path / "tb").glob("SarsaAAC_RbfPolicy_1/events.out.tfevents.*"))
+    assert main(["train", "--env", "sb3_aac/ParameterizedTarget-v0", "--policy", "MlpPolicy", "--timesteps", "200",
+                 "--n-envs", "2", "--eval-episodes", "3", "--progress-bar"]) == 0  # fmt: skip
+    assert "greedy evaluation over 3 episodes: return" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("model", ["model.zip", "policy.aacp", "dir"])
+def test_evaluate(trained: Path, model: str, capsys) -> None:
+    path = trained if model == "dir" else trained / model
+    assert main(["evaluate", str(path), "--episodes", "20", "--seed", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "RoboCupDribblePaper-v0" in out and "mean distance" in out and "ball-loss rate" in out
+
+
+def test_zip_and_export_evaluate_alike(trained: Path, capsys) -> None:
+    main(["evaluate", str(trained / "model.zip"), "--episodes", "30"])
+    from_zip = capsys.readouterr().out.splitlines()[1:]
+    main(["evaluate", str(trained / "policy.aacp"), "--episodes", "30"])
+    assert capsys.readouterr().out.splitlines()[1:] == from_zip
+
+
+def test_evaluate_dribbler(capsys) -> None:
+    assert main(["evaluate", "dribbler", "--episodes", "10", "--profile", "v11"]) == 0
+    assert "RoboCupDribblePaper-v0" in capsys.readouterr().out
+
+
+def test_reliability_writes_png(trained: Path, tmp_path: Path, capsys) -> None:
+    png = tmp_path / "figs" / "rel.png"
+    assert main(["reliability", str(trained / "model.zip"), "--players", "200", "--out", str(png)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    out = capsys.readouterr().out
+    assert "200 fresh players" in out and "reached 20 m" in out
+
+
+def test_render_gif(trained: Path, tmp_path: Path, capsys) -> None:
+    pytest.importorskip("pygame")
+    import imageio.v2 as imageio
+
+    gif = tmp_path / "episode.gif"
+    assert main(["render", str(trained / "policy.aacp"), "--out", str(gif), "--seed", "2"]) == 0
+    frames = imageio.mimread(gif)
+    steps = int(capsys.readouterr().out.split(": ")[1].split()[0])
+    assert len(frames) == steps + 1 and frames[0].ndim == 3
+
+
+def test_export(trained: Path, tmp_path: Path, capsys) -> None:
+    from sb3_aac import RuntimePolicy, SarsaAAC
+
+    out = tmp_path / "sub" / "d.aacp"
+    assert main(["export", str(trained / "model.zip"), str(out)]) == 0
+    runtime, model = RuntimePolicy.load(out), SarsaAAC.load(trained / "model.zip")
+    obs = np.zeros(10, np.float32)
+    assert runtime.act(obs)[0] == model.predict(obs, deterministic=True)[0][0]
+    assert "RuntimePolicy" in capsys.readouterr().out
+
+
+def test_help(capsys) -> None:
+    for argv in (["--help"], ["train", "--help"], ["export", "--help"]):
+        with pytest.raises(SystemExit) as info:
+            main(argv)
+        assert info.value.code == 0
+    out = capsys.readouterr().out
+    assert "examples:" in out and "--set KEY=VALUE" in out and "docs/export-format.md" in out
+
+
+def test_module_entry_point() -> None:
+    root = Path(__file__).resolve().parents[1]
+    env = {"PYTHONPATH": f"{root}:{root / 'envs'}", "PATH": "/usr/bin:/bin"}
+    result = subprocess.run([sys.executable, "-m", "sb3_aac.cli", "export", "nothing.zip", "x.aacp"], capture_output=True,
+                            text=True, env=env, cwd=root, check=False)  # fmt: skip
+    assert result.returncode == 2 and "does not exist" in result.stderr and "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["train", "--timesteps", "0"], "must be positive"),
+        (["train", "--episodes", "-3"], "must be positive"),
+        (["train", "--timesteps", "10", "--episodes", "10"], "not allowed with"),
+        (["train", "--env", "Nope-v0"], "unknown env id 'Nope-v0'"),
+        (["train", "--set", "nonsense=1"], "valid keys: .*gamma"),
+        (["train", "--set", "seed=1"], "--seed"),
+        (["train", "--set", "gamma"], "expected key=value"),
+        (["train", "--timesteps", "10", "--set", "gamma=7"], "gamma must be in"),
+        (["train", "--policy", "CnnPolicy"], "invalid choice"),
+        (["train", "--env", "CartPole-v1", "--timesteps", "10"], "not a parameterized action space"),
+        (["train", "--gym-package", "no_such_module_xyz"], "cannot be imported"),
+        (["evaluate", "missing.zip"], "does not exist"),
+        (["evaluate", "dribbler", "--episodes", "0"], "must be positive"),
+        (["reliability", "dribbler", "--out", "figure.jpg"], "must end with .png"),
+        (["render", "dribbler", "--out", "clip.avi"], "must end with .gif or .mp4"),
+        (["export", "missing.zip", "out.aacp"], "does not exist"),
+        ([], "required: COMMAND"),
+    ],
+)
+def test_errors(capsys, argv: list[str], message: str) -> None:
+    import re
+
+    assert re.search(message, run_error(capsys, argv))
+
+
+def test_errors_on_files(trained: Path, tmp_path: Path, capsys) -> None:
+    (tmp_path / "notes.txt").write_text("hello")
+    assert "must be a .zip or .aacp" in run_error(capsys, ["evaluate", str(tmp_path / "notes.txt")])
+    (tmp_path / "broken.zip").write_bytes(b"PK\x03\x04 not really")
+    assert "cannot load" in run_error(capsys, ["evaluate", str(tmp_path / "broken.zip")])
+    damaged = bytearray((trained / "policy.aacp").read_bytes())
+    damaged[100] ^= 1
+    (tmp_path / "damaged.aacp").write_bytes(bytes(damaged))
+    assert "checksum" in run_error(capsys, ["evaluate", str(tmp_path / "damaged.aacp")])
+    assert "must end with .aacp" in run_error(capsys, ["export", str(trained / "model.zip"), str(tmp_path / "p.json")])
+    assert "does not fit --profile v19" in run_error(capsys, ["evaluate", str(trained / "model.zip"), "--profile", "v19"])
+    assert "existing file" in run_error(capsys, ["train", "--timesteps", "10", "--out", str(tmp_path / "notes.txt")])
+
+
+def test_bench_quick(capsys) -> None:
+    # The runtime benchmark in its quick mode (the env benchmark alone takes as long as this whole file).
+    assert main(["bench", "--only", "runtime"]) == 0

@@ -1,0 +1,274 @@
+"""Exported policies (sb3_aac.export_policy / sb3_aac.RuntimePolicy) decide exactly as the model, and refuse bad files."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch as th
+
+from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
+from sb3_aac.common.envs import ParameterizedTargetEnv
+from sb3_aac.export import encode_policy_file, policy_arrays, policy_header
+from sb3_aac.runtime import read_policy_file
+from tests.helpers import LAYOUTS, POLICIES
+
+N_OBS = 3000  # batched comparisons
+N_SINGLE = 500  # one-observation comparisons, per backend
+
+
+def randomised_model(policy: str, layout: str, seed: int = 0, **policy_kwargs) -> SarsaAAC:
+    """A model with random weights under which every action type wins somewhere (the first such seed from ``seed``)."""
+    model = SarsaAAC(policy, ParameterizedTargetEnv(layout=layout, n_types=3), seed=seed, policy_kwargs=policy_kwargs)
+    probe = observations(model, 500)
+    for attempt in range(seed, seed + 50):
+        generator = th.Generator().manual_seed(attempt)
+        with th.no_grad():
+            for param in model.policy.approximators.parameters():
+                param.copy_(th.randn(param.shape, generator=generator, dtype=param.dtype))
+        model.policy.rebind()
+        types = [a[0] for a in model.predict(probe, deterministic=True)[0]]
+        if len(set(types)) == model.policy.n_types:
+            return model
+    raise AssertionError(f"no seed gives {policy} weights under which every type wins")
+
+
+def observations(model: SarsaAAC, n: int = N_OBS, seed: int = 1) -> np.ndarray:
+    space = model.observation_space
+    span = space.high - space.low
+    # Also 20% outside the bounds: predict does not clip observations, neither may the runtime.
+    return np.random.default_rng(seed).uniform(space.low - 0.2 * span, space.high + 0.2 * span, (n, *space.shape)).astype(np.float32)
+
+
+def flat(value) -> np.ndarray:
+    return np.concatenate([np.ravel(v) for v in value]) if isinstance(value, tuple) else np.ravel(value)
+
+
+def assert_same_action(got: tuple, expected: tuple) -> None:
+    assert type(got[0]) is type(expected[0]) or int(got[0]) == int(expected[0])
+    assert int(got[0]) == int(expected[0])
+    assert len(got) == len(expected)
+    for g, e in zip(got[1:], expected[1:], strict=True):
+        g_flat, e_flat = flat(g), flat(e)
+        assert g_flat.dtype == e_flat.dtype
+        # unscale may place a bound by the mid/half formula or by interpolation: at most an ulp apart.
+        np.testing.assert_allclose(g_flat, e_flat, rtol=1e-6, atol=1e-6)
+
+
+def chosen_params(action: tuple, layout: str, k: int) -> np.ndarray:
+    """The parameters of the chosen (0-based) type ``k`` in an env action."""
+    if layout in ("oneof", "shared"):
+        return np.ravel(action[1])
+    return np.ravel(action[1][k] if layout == "nested" else action[1 + k])
+
+
+@pytest.fixture(scope="module")
+def tmp_dir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("export")
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+@pytest.mark.parametrize("policy", POLICIES)
+def test_same_decisions_as_predict(policy: str, layout: str, tmp_dir: Path) -> None:
+    model = randomised_model(policy, layout, n_rbf=7 if policy != "MlpPolicy" else None, hidden_units=None if policy == "RbfPolicy" else 4)
+    path = export_policy(model, tmp_dir / f"{policy}-{layout}")
+    assert path.suffix == ".aacp"
+    obs = observations(model)
+    expected, _ = model.predict(obs, deterministic=True)
+    spec = model.policy.spec
+    types = np.array([a[0] for a in expected])
+    assert len(np.unique(types)) == spec.n_types, "the test needs every type to be chosen somewhere"
+
+    for backend in ("numpy", "numba"):
+        runtime = RuntimePolicy.load(path, backend=backend)
+        assert runtime.backend == backend
+        # act(): one observation at a time, against predict on one observation
+        for o, e in zip(obs[:N_SINGLE], expected[:N_SINGLE], strict=True):
+            k, params = runtime.act(o)
+            chosen = model.predict(o, deterministic=True)[0]
+            assert k == int(chosen[0]) == int(e[0])
+            want = chosen_params(chosen, layout, k - spec.start)
+            assert params.shape == want.shape and params.dtype == want.dtype
+            np.testing.assert_allclose(params, want, rtol=1e-6, atol=1e-6)
+
+    runtime = RuntimePolicy.load(path, backend="numpy")
+    # act_batch and predict(): the whole batch
+    ks, params = runtime.act_batch(obs)
+    np.testing.assert_array_equal(ks, types)
+    got, _ = runtime.predict(obs)
+    for g, e in zip(got, expected, strict=True):
+        assert_same_action(g, e)
+    assert_same_action(runtime.predict(obs[0])[0], model.predict(obs[0], deterministic=True)[0])
+    # the critic comes along
+    out, _ = model.policy.evaluate(obs[:50].astype(np.float64))
+    np.testing.assert_allclose(runtime.value(obs[:50]), out[:, -1], rtol=1e-12, atol=1e-12)
+
+
+def test_dribbling_model_and_metadata(tmp_dir: Path) -> None:
+    from robocup_dribble import DribbleVecEnv
+
+    model = SarsaAAC("RbfPolicy", DribbleVecEnv(4, profile="v11"), seed=0).learn(500)
+    path = export_policy(model, tmp_dir / "dribble.aacp", metadata={"env_id": "RoboCupDribblePaper-v0"})
+    runtime = RuntimePolicy.load(path)
+    assert runtime.header["metadata"] == {"env_id": "RoboCupDribblePaper-v0", "num_timesteps": 500}
+    assert runtime.header["approximators"]["features"] == {"type": "rbf", "n_rbf": 10, "rbf_width": 1.0, "n_features": 100}
+    obs = observations(model, 2000)
+    expected, _ = model.predict(obs, deterministic=True)
+    for o, e in zip(obs, expected, strict=True):
+        k, params = runtime.act(o)
+        assert k == e[0]
+        np.testing.assert_allclose(params, e[1][k], rtol=1e-6, atol=1e-6)
+
+
+def test_runtime_imports_numpy_only(tmp_dir: Path) -> None:
+    """runtime.py works copied out on its own: no torch, no SB3, not even the sb3_aac package."""
+    model = randomised_model("RbfPolicy", "nested")
+    path = export_policy(model, tmp_dir / "alone.aacp")
+    source = Path(__file__).resolve().parents[1] / "sb3_aac" / "runtime.py"
+    script = f"""
+import importlib.util, sys
+for name in ("torch", "stable_baselines3", "sb3_aac", "gymnasium"):
+    sys.modules[name] = None  # any import of these fails
+spec = importlib.util.spec_from_file_location("runtime", {str(source)!r})
+runtime = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(runtime)
+policy = runtime.RuntimePolicy.load({str(path)!r}, backend="numpy")
+print(policy.act([0.1, -0.2])[0])
+"""
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=False)
+    assert result.returncode == 0, result.stderr
+    assert int(result.stdout) == model.predict(np.array([0.1, -0.2], np.float32), deterministic=True)[0][0]
+
+
+# ---------------------------------------------------------------------------------------------------- bad files
+
+
+@pytest.fixture(scope="module")
+def good_file(tmp_dir: Path) -> Path:
+    return export_policy(randomised_model("RbfMlpPolicy", "flat", n_rbf=3, hidden_units=2), tmp_dir / "good.aacp")
+
+
+def rewrite(path: Path, header_edit=None, arrays_edit=None) -> bytes:
+    """The file re-encoded (with a valid checksum) after editing its header and/or arrays."""
+    header, arrays = read_policy_file(path)
+    header = {k: v for k, v in header.items() if k not in ("arrays", "blob_size")}
+    arrays = {k: np.array(v) for k, v in arrays.items()}
+    if header_edit:
+        header_edit(header)
+    if arrays_edit:
+        arrays_edit(arrays)
+    return encode_policy_file(header, arrays)
+
+
+def load_bytes(tmp_dir: Path, data: bytes) -> RuntimePolicy:
+    path = tmp_dir / "bad.aacp"
+    path.write_bytes(data)
+    return RuntimePolicy.load(path)
+
+
+def test_good_file_round_trips(good_file: Path) -> None:
+    header, arrays = read_policy_file(good_file)
+    assert header["format"] == "sb3-aac-policy" and header["version"] == 1
+    data = good_file.read_bytes()
+    assert data[:8] == b"SB3AACP\x00"
+    (header_len,) = struct.unpack_from("<Q", data, 8)
+    assert (16 + header_len) % 8 == 0
+    assert hashlib.sha256(data[:-32]).digest() == data[-32:]
+    assert set(arrays) == {"obs_low", "obs_high", "obs_mid", "obs_half", "param_low", "param_high", "rbf_centers", "rbf_widths", "weight1", "bias1", "weight2", "bias2"}
+
+
+@pytest.mark.parametrize("cut", [0, 10, 100, -33, -1])
+def test_truncated(good_file: Path, tmp_dir: Path, cut: int) -> None:
+    data = good_file.read_bytes()
+    with pytest.raises(ValueError, match="truncated|checksum"):
+        load_bytes(tmp_dir, data[:cut])
+
+
+@pytest.mark.parametrize("where", [3, 20, 200, -40, -5])
+def test_altered_byte(good_file: Path, tmp_dir: Path, where: int) -> None:
+    data = bytearray(good_file.read_bytes())
+    data[where] ^= 0x01
+    with pytest.raises(ValueError, match="checksum|magic"):
+        load_bytes(tmp_dir, bytes(data))
+
+
+def test_trailing_garbage_and_pickle(good_file: Path, tmp_dir: Path) -> None:
+    with pytest.raises(ValueError, match="checksum"):
+        load_bytes(tmp_dir, good_file.read_bytes() + b"\x00" * 8)
+    import pickle
+
+    with pytest.raises(ValueError, match="magic"):
+        load_bytes(tmp_dir, pickle.dumps({"a": 1}) * 4)
+
+
+def test_unknown_version_and_format(good_file: Path, tmp_dir: Path) -> None:
+    with pytest.raises(ValueError, match="unknown format version 2"):
+        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(version=2)))
+    with pytest.raises(ValueError, match="format"):
+        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(format="other")))
+
+
+def test_missing_or_misshapen_array(good_file: Path, tmp_dir: Path) -> None:
+    with pytest.raises(ValueError, match="missing array 'weight2'"):
+        load_bytes(tmp_dir, rewrite(good_file, arrays_edit=lambda a: a.pop("weight2")))
+    with pytest.raises(ValueError, match="shape"):
+        load_bytes(tmp_dir, rewrite(good_file, arrays_edit=lambda a: a.update(bias2=np.zeros(2))))
+    with pytest.raises(ValueError, match="NaN"):
+        load_bytes(tmp_dir, rewrite(good_file, arrays_edit=lambda a: a["weight1"].__setitem__((0, 0, 0), np.nan)))
+
+
+def test_inconsistent_header(good_file: Path, tmp_dir: Path) -> None:
+    def bad_dim(h):
+        h["action"]["types"][1]["dim"] = 5
+
+    def bad_layout(h):
+        h["action"]["layout"] = "diagonal"
+
+    def no_head(h):
+        del h["approximators"]["head"]
+
+    for edit, message in [(bad_dim, "disagree"), (bad_layout, "layout"), (no_head, "lacks")]:
+        with pytest.raises(ValueError, match=message):
+            load_bytes(tmp_dir, rewrite(good_file, edit))
+
+
+def test_wrong_observations(good_file: Path) -> None:
+    for backend in ("numpy", "numba"):
+        runtime = RuntimePolicy.load(good_file, backend=backend)
+        with pytest.raises(ValueError, match="shape"):
+            runtime.act(np.zeros(3))
+        with pytest.raises(ValueError, match="shape"):
+            runtime.act(np.zeros((2, 2)))
+        with pytest.raises(ValueError, match="NaN or inf"):
+            runtime.act(np.array([np.nan, 0.0]))
+        with pytest.raises(ValueError, match="NaN or inf"):
+            runtime.act(np.array([np.inf, 0.0]))
+    with pytest.raises(ValueError, match="shape"):
+        runtime.act_batch(np.zeros((4, 3)))
+    with pytest.raises(ValueError, match=r"Observation\(s\) \[1\]"):
+        runtime.act_batch(np.array([[0.0, 0.0], [np.inf, 0.0]]))
+
+
+def test_not_a_sarsa_model(tmp_dir: Path) -> None:
+    with pytest.raises(ValueError, match="SarsaAAC model"):
+        export_policy(object(), tmp_dir / "x.aacp")
+    with pytest.raises(ValueError, match="backend"):
+        RuntimePolicy({}, {}, backend="gpu")
+
+
+def test_header_is_plain_json(good_file: Path) -> None:
+    data = good_file.read_bytes()
+    (header_len,) = struct.unpack_from("<Q", data, 8)
+    header = json.loads(data[16 : 16 + header_len])
+    model = randomised_model("RbfMlpPolicy", "flat", n_rbf=3, hidden_units=2)
+    expected = policy_header(model.policy)
+    for key in ("observation", "action", "approximators"):
+        assert header[key] == expected[key]
+    shapes = {name: list(a.shape) for name, a in policy_arrays(model.policy).items()}
+    assert {name: entry["shape"] for name, entry in header["arrays"].items()} == shapes
