@@ -14,8 +14,10 @@ into an agent on its own. Loading never executes anything from the file: it chec
 over the whole file, the format version, and the name, dtype, shape and placement of every array, and raises a
 :class:`ValueError` saying what is wrong rather than ever returning an action from a damaged file.
 
-The arithmetic mirrors the training code's numpy kernel (:class:`sb3_aac.common.approximators.BankKernel`), so the
-decisions are those of ``model.predict(obs, deterministic=True)``.
+The approximators' forward pass, :class:`BankForward`, lives here and nowhere else: training
+(:class:`sb3_aac.common.approximators.BankKernel`) and ``model.predict`` call this same code, so the decisions are
+those of ``model.predict(obs, deterministic=True)``. The optional numba kernel behind :meth:`RuntimePolicy.act` is
+the same formulas compiled for one observation.
 """
 
 from __future__ import annotations
@@ -41,7 +43,80 @@ BACKENDS = ("auto", "numpy", "numba")  # how act() computes: numba if importable
 PARAM_DTYPES = ("float16", "float32", "float64")
 ARRAY_DTYPE = "<f8"  # every array: little-endian IEEE-754 float64, C order
 
-__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "MAGIC", "RuntimePolicy", "expected_array_shapes", "read_policy_file"]
+BANK_ARRAYS = ("obs_mid", "obs_half", "rbf_centers", "rbf_widths", "weight", "bias", "weight1", "bias1", "weight2", "bias2")
+
+__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "MAGIC", "BankForward", "RuntimePolicy", "expected_array_shapes", "read_policy_file"]
+
+
+class BankForward:
+    """
+    The forward pass of a bank of ``A`` independent function approximators of one observation: the only
+    implementation of these formulas (see :mod:`sb3_aac.common.approximators` for the model). Training subclasses
+    it (:class:`~sb3_aac.common.approximators.BankKernel`), ``model.predict`` and :class:`RuntimePolicy` call it.
+
+    - features ``phi`` (``F``): the inputs scaled from ``[low, high]`` to ``[-1, 1]``, ``(s - mid) / half``; or per
+      input ``m`` Gaussian RBFs on the scaled input, ``exp(-0.5 * ((s~_i - c_ij) / w_ij)**2)``. Both are computed
+      as ``s * a - b`` (then ``exp(-z**2)`` for RBFs) with the constants ``a``, ``b`` folded once here;
+    - head of approximator ``a``: linear, ``weight[a] . phi + bias[a]``; or one tanh layer,
+      ``weight2[a] . tanh(weight1[a] @ phi + bias1[a]) + bias2[a]``.
+
+    The arguments are the arrays of the export format (names in ``BANK_ARRAYS``): ``obs_mid``, ``obs_half`` ``(D,)``;
+    ``rbf_centers``, ``rbf_widths`` ``(D, m)`` or None; ``weight`` ``(A, F)`` and ``bias`` ``(A,)``, or ``weight1``
+    ``(A, H, F)``, ``bias1`` ``(A, H)``, ``weight2`` ``(A, H)``, ``bias2`` ``(A,)``. The weights are held as given
+    (views, no copies), so in-place updates of them are seen by the next call.
+    """
+
+    def __init__(
+        self,
+        obs_mid: np.ndarray,
+        obs_half: np.ndarray,
+        rbf_centers: np.ndarray | None = None,
+        rbf_widths: np.ndarray | None = None,
+        weight: np.ndarray | None = None,
+        bias: np.ndarray | None = None,
+        weight1: np.ndarray | None = None,
+        bias1: np.ndarray | None = None,
+        weight2: np.ndarray | None = None,
+        bias2: np.ndarray | None = None,
+    ):
+        scale = 1.0 / obs_half
+        shift = obs_mid * scale
+        self.rbf = rbf_centers is not None
+        if self.rbf:
+            # exp(-0.5 * ((obs * scale - shift - c) / w)**2) = exp(-(obs * a - b)**2)
+            inv_w = np.sqrt(0.5) / rbf_widths
+            self.feature_a, self.feature_b = scale[:, None] * inv_w, (shift[:, None] + rbf_centers) * inv_w
+        else:
+            self.feature_a, self.feature_b = scale, shift
+        self.mlp = weight1 is not None
+        if self.mlp:
+            self.w1, self.b1, self.w2, self.b2 = weight1, bias1, weight2, bias2
+            self.w1_flat, self.b1_flat = weight1.reshape(-1, weight1.shape[-1]), bias1.reshape(-1)
+            self.head_w, self.head_b = self.w1_flat, self.b1_flat
+        else:
+            self.w, self.b = self.head_w, self.head_b = weight, bias
+
+    def features(self, obs: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """
+        Observations ``(..., D)`` -> features ``(..., F)`` (float64).
+
+        :param out: a float64 buffer of shape ``(..., *feature_a.shape)`` to compute in (saves allocations)
+        """
+        z = np.multiply(obs[..., None] if self.rbf else obs, self.feature_a, out=out)
+        np.subtract(z, self.feature_b, out=z)
+        if not self.rbf:
+            return z
+        np.multiply(z, z, out=z)
+        np.negative(z, out=z)
+        return np.exp(z, out=z).reshape(*obs.shape[:-1], -1)
+
+    def outputs(self, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """Features ``(..., F)`` -> every output ``(..., A)``, and the tanh activations ``(..., A, H)`` (None if linear)."""
+        pre = phi @ self.head_w.T + self.head_b
+        if not self.mlp:
+            return pre, None
+        hidden = np.tanh(pre, out=pre).reshape(*phi.shape[:-1], *self.w2.shape)
+        return (hidden * self.w2).sum(-1) + self.b2, hidden
 
 
 def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
@@ -186,12 +261,15 @@ def read_policy_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str,
 
 def _compile_act_kernel() -> Any:
     """
-    A numba-compiled ``act`` (features, every output, argmax, unscale) for one observation, or None without numba.
+    A numba-compiled ``act`` for one observation, or None without numba: :meth:`BankForward.features` and
+    :meth:`BankForward.outputs` (on :class:`BankForward`'s folded constants and weights), the argmax and
+    :meth:`RuntimePolicy.unscale`, the same formulas written as loops and compiled.
 
-    Optional: the runtime needs only numpy; numba (a dependency of sb3-aac) removes numpy's per-call overhead,
-    about a microsecond for each of the dozen array operations of a decision. Sums run in a different order than
-    numpy's BLAS, so outputs can differ from the numpy path in the last bit; the decisions are the same except
-    for exact ties of that size.
+    Optional, and only a speed-up: the runtime needs only numpy; numba (a dependency of sb3-aac) removes numpy's
+    per-call overhead, a microsecond or more for each of the dozen array operations of a decision, which a single
+    decision cannot amortise (numpy alone does not reach 10 us). Sums run in a different order than numpy's BLAS,
+    so outputs can differ from the numpy path in the last bit; the decisions are the same except for exact ties of
+    that size (tested on every policy and layout).
     """
     try:
         import numba
@@ -204,8 +282,8 @@ def _compile_act_kernel() -> Any:
     def act_kernel(x, pack, meta, phi, params):  # pragma: no cover
         # Few arguments: numba's dispatch costs about as much per argument as a small loop iteration does.
         # meta: d, m (RBFs per input, 0: scaled inputs), F, H (0: linear head), K, 7 segment starts in pack,
-        # then the K + 1 parameter offsets. pack: feature constants a, b; weights w (or w1), biases b (or b1),
-        # w2, b2 (MLP head); parameter low, high.
+        # then the K + 1 parameter offsets. pack: BankForward's feature_a, feature_b, head_w, head_b, w2, b2
+        # (MLP head); parameter low, high.
         d, m, n_features, h, n_types = meta[0], meta[1], meta[2], meta[3], meta[4]
         fa, fb, pw, pb, pw2, pb2, plow = meta[5], meta[6], meta[7], meta[8], meta[9], meta[10], meta[11]
         total = 0.0
@@ -304,69 +382,31 @@ class RuntimePolicy:
         if not (self.param_low <= self.param_high).all():
             raise _fail(path, "param_low must be <= param_high everywhere")
 
-        # Derived constants, computed exactly as BankKernel computes them.
-        scale = 1.0 / arrays["obs_half"]
-        shift = arrays["obs_mid"] * scale
-        self.rbf = approx["features"]["type"] == "rbf"
-        if self.rbf:
-            if not (arrays["rbf_widths"] > 0).all():
-                raise _fail(path, "rbf_widths must be > 0 everywhere")
-            inv_w = np.sqrt(0.5) / arrays["rbf_widths"]
-            self._rbf_a = scale[:, None] * inv_w
-            self._rbf_b = (shift[:, None] + arrays["rbf_centers"]) * inv_w
-        else:
-            self._scale, self._shift = scale, shift
-        self.mlp = approx["head"]["type"] == "tanh_mlp"
-        k, p, a = self.n_types, self.n_params, approx["n_outputs"]
-        if self.mlp:
-            h = self.hidden_units = approx["head"]["hidden_units"]
-            w1, b1, w2, b2 = arrays["weight1"], arrays["bias1"], arrays["weight2"], arrays["bias2"]
-            self._w1_flat = np.ascontiguousarray(w1.reshape(a * h, -1))
-            self._b1_flat = b1.reshape(-1).copy()
-            self._w2, self._b2 = w2.copy(), b2.copy()
-            self._w1_q, self._b1_q = self._w1_flat[: k * h], self._b1_flat[: k * h]
-            self._w2_q, self._b2_q = self._w2[:k], self._b2[:k]
-            # Per type: its parameter approximators' hidden layers, output weights and biases.
-            self._param_heads = []
-            for j in range(k):
-                lo, hi = k + self.offsets[j], k + self.offsets[j + 1]
-                self._param_heads.append((self._w1_flat[lo * h : hi * h], self._b1_flat[lo * h : hi * h], self._w2[lo:hi], self._b2[lo:hi]))
-        else:
-            self.hidden_units = None
-            self._w, self._b = np.ascontiguousarray(arrays["weight"]), arrays["bias"].copy()
-            self._w_q, self._b_q = self._w[:k], self._b[:k]
-            self._param_heads = [
-                (self._w[k + self.offsets[j] : k + self.offsets[j + 1]], self._b[k + self.offsets[j] : k + self.offsets[j + 1]])
-                for j in range(k)
-            ]
-        self._p_slice = slice(k, k + p)
-        # Per type: slices of the parameter bounds, as float64 arrays.
-        self._bounds = [(self.param_low[s], self.param_high[s]) for s in (self.type_slice(j) for j in range(k))]
-        self._bounds_lists = [(low.tolist(), high.tolist()) for low, high in self._bounds]
-        n_features = approx["features"]["n_features"]
-        self._phi = np.empty(n_features)
-        self._z = self._phi.reshape(self.obs_size, -1)
+        if "rbf_widths" in arrays and not (arrays["rbf_widths"] > 0).all():
+            raise _fail(path, "rbf_widths must be > 0 everywhere")
+        self._bank = bank = BankForward(**{name: arrays[name] for name in BANK_ARRAYS if name in arrays})
+        self.rbf, self.mlp = bank.rbf, bank.mlp
+        self.hidden_units = approx["head"].get("hidden_units")
+        k = self.n_types
+        self._p_slice = slice(k, k + self.n_params)
+        # Per type: its parameter bounds as Python floats.
+        self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in map(self.type_slice, range(k))]
+        self._feature_buffer = np.empty(bank.feature_a.shape)  # (D,) or (D, m), reused by act()
         self._kernel_args: tuple | None = None
         if backend != "numpy":
             kernel = _act_kernel()
             if kernel is None and backend == "numba":
                 raise ValueError("backend='numba' needs numba (pip install numba); use backend='numpy' or 'auto'")
             if kernel is not None:
-                if self.rbf:
-                    segments = [self._rbf_a, self._rbf_b]
-                else:
-                    segments = [self._scale, self._shift]
-                if self.mlp:
-                    segments += [self._w1_flat, self._b1_flat, self._w2, self._b2]
-                else:
-                    segments += [self._w, self._b, np.zeros(0), np.zeros(0)]
-                segments += [self.param_low, self.param_high]
+                head2 = [bank.w2, bank.b2] if self.mlp else [np.zeros(0), np.zeros(0)]
+                segments = [bank.feature_a, bank.feature_b, bank.head_w, bank.head_b, *head2, self.param_low, self.param_high]
                 starts = np.cumsum([0] + [seg.size for seg in segments])[:-1]
-                sizes = [self.obs_size, approx["features"].get("n_rbf", 0) if self.rbf else 0, n_features, self.hidden_units or 0, k]
+                m = bank.feature_a.shape[1] if self.rbf else 0
+                sizes = [self.obs_size, m, approx["features"]["n_features"], self.hidden_units or 0, k]
                 meta = np.array([*sizes, *starts[:7], *self.offsets], dtype=np.int64)
                 pack = np.concatenate([seg.ravel() for seg in segments])
                 self._kernel = kernel
-                self._kernel_args = (pack, meta, self._phi, np.empty(max(self.dims)))
+                self._kernel_args = (pack, meta, self._feature_buffer.reshape(-1), np.empty(max(self.dims)))
         self.backend = "numpy" if self._kernel_args is None else "numba"
 
     # ------------------------------------------------------------------ loading
@@ -376,7 +416,7 @@ class RuntimePolicy:
         """
         Read a policy file written by :func:`sb3_aac.export_policy`.
 
-        :param backend: how :meth:`act` computes: ``"numpy"`` (the reference: the training kernel's operations),
+        :param backend: how :meth:`act` computes: ``"numpy"`` (:class:`BankForward`, the code training runs),
             ``"numba"`` (compiled, several times faster on one observation), or ``"auto"`` (numba when it can be
             imported). Batched methods always use numpy.
 
@@ -412,19 +452,6 @@ class RuntimePolicy:
             raise ValueError(f"The observation holds NaN or inf values: {x}")
         return x
 
-    def _features(self, x: np.ndarray) -> np.ndarray:
-        """The feature vector ``(F,)`` of one observation, in a buffer reused by the next call."""
-        if not self.rbf:
-            phi = self._phi
-            np.multiply(x, self._scale, out=phi)
-            return np.subtract(phi, self._shift, out=phi)
-        z = self._z  # (D, m) view of the (F,) buffer: exp(-(x_i * a_ij - b_ij)**2), as the kernel computes it
-        np.multiply(x[:, None], self._rbf_a, out=z)
-        np.subtract(z, self._rbf_b, out=z)
-        np.multiply(z, z, out=z)
-        np.negative(z, out=z)
-        return np.exp(self._phi, out=self._phi)
-
     def act(self, obs: Any) -> tuple[int, np.ndarray]:
         """
         The greedy decision for one observation.
@@ -444,14 +471,10 @@ class RuntimePolicy:
             if k < 0:
                 raise ValueError(f"The observation holds NaN or inf values: {x}")
             return self.type_start + k, self._kernel_args[-1][:dim].astype(self.param_dtypes[k])
-        phi = self._features(self._observation(obs))
+        phi = self._bank.features(self._observation(obs), out=self._feature_buffer)
         # Every output at once: with numpy, one matrix-vector product costs less than separate calls for Q and
         # for the chosen type's parameters (a C++ runtime would compute only those, see docs/export-format.md).
-        if self.mlp:
-            hidden = np.tanh(np.dot(self._w1_flat, phi) + self._b1_flat).reshape(self._w2.shape)
-            out = ((hidden * self._w2).sum(1) + self._b2).tolist()
-        else:
-            out = (np.dot(self._w, phi) + self._b).tolist()
+        out = self._bank.outputs(phi)[0].tolist()
         q = out[: self.n_types]
         k = q.index(max(q))  # the first maximum, like numpy's argmax
         # Unscale in Python floats: the same IEEE operations as unscale(), cheaper on a few values.
@@ -485,16 +508,7 @@ class RuntimePolicy:
         Every approximator's output for a batch ``(n, D)``: ``(n, A)`` columns Q (K), scaled parameters
         (n_params), value V (1).
         """
-        x = self._batch(obs)
-        if not self.rbf:
-            phi = x * self._scale - self._shift
-        else:
-            z = x[:, :, None] * self._rbf_a - self._rbf_b
-            phi = np.exp(-(z * z)).reshape(len(x), -1)
-        if not self.mlp:
-            return phi @ self._w.T + self._b
-        hidden = np.tanh(phi @ self._w1_flat.T + self._b1_flat).reshape(len(x), *self._w2.shape)
-        return (hidden * self._w2).sum(2) + self._b2
+        return self._bank.outputs(self._bank.features(self._batch(obs)))[0]
 
     def unscale(self, params_scaled: np.ndarray) -> np.ndarray:
         """Scaled parameters ``(..., n_params)`` in ``[-1, 1]`` -> env units, clipped to the bounds (float64)."""

@@ -20,13 +20,36 @@ def make_bank(name: str, n_outputs: int = 4) -> ApproximatorBank:
     return ApproximatorBank(LOW, HIGH, n_outputs, **CONFIGS[name])
 
 
+def torch_reference(tensors: dict[str, th.Tensor], obs: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
+    """
+    Test-only reference: the module docstring's formulas written directly in torch (unfolded constants), for
+    autograd. Returns the features, the outputs and the hidden activations (None for a linear head).
+    """
+    x = (obs - tensors["obs_mid"]) / tensors["obs_half"]
+    if "rbf_centers" in tensors:
+        z = (x[:, :, None] - tensors["rbf_centers"]) / tensors["rbf_widths"]
+        x = th.exp(-0.5 * z * z).reshape(len(obs), -1)
+    if "weight" in tensors:
+        return x, x @ tensors["weight"].T + tensors["bias"], None
+    hidden = th.tanh(th.einsum("nf,ahf->nah", x, tensors["weight1"]) + tensors["bias1"])
+    return x, (hidden * tensors["weight2"]).sum(-1) + tensors["bias2"], hidden
+
+
 @pytest.mark.parametrize("name", CONFIGS)
-def test_numpy_kernel_matches_torch(name):
+def test_forward_matches_torch_reference(name):
     bank = make_bank(name)
     obs = np.random.default_rng(0).uniform(LOW, HIGH, (7, 3))
-    out, _ = bank.numpy_kernel().forward(obs)
-    np.testing.assert_allclose(out, bank(th.as_tensor(obs)).numpy(), rtol=1e-12, atol=1e-12)
+    out, cache = bank.numpy_kernel().forward(obs)
+    x, expected, hidden = torch_reference(bank.state_dict(), th.as_tensor(obs))
+    np.testing.assert_allclose(out, expected.numpy(), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(cache.x, x.numpy(), rtol=1e-12, atol=1e-12)
+    if hidden is not None:
+        np.testing.assert_allclose(cache.hidden, hidden.numpy(), rtol=1e-12, atol=1e-12)
     assert out.shape == (7, 4)
+    # The module's forward (a tensor, as SB3 calls it) is the same numpy code.
+    tensor_out = bank(th.as_tensor(obs))
+    assert tensor_out.dtype == th.float64
+    np.testing.assert_array_equal(tensor_out.numpy(), out)
 
 
 @pytest.mark.parametrize("name", CONFIGS)
@@ -39,20 +62,17 @@ def test_update_equals_normalised_gradient_step(name):
     err = np.array([[0.5, 0.0, -1.0, 2.0]])
     lr = np.array([0.1, 0.2, 0.3, 0.4])
 
-    reference = copy.deepcopy(bank)
-    params = {name: p.requires_grad_(True) for name, p in reference.named_parameters()}
-    output = reference(th.as_tensor(obs))
+    params = {pname: p.detach().clone().requires_grad_(True) for pname, p in bank.named_parameters()}
+    x, output, hidden = torch_reference({**dict(bank.named_buffers()), **params}, th.as_tensor(obs))
     # d/dw of sum(lr * err * output) is the descent direction for 0.5 * err^2 with err held fixed.
     (output * th.as_tensor(lr * err)).sum().backward()
     expected = {}
     with th.no_grad():
-        x = reference.features(th.as_tensor(obs))
         x_scale = 1.0 / (1.0 + (x * x).sum())
     for pname, p in params.items():
         if pname in ("weight2", "bias2"):
             with th.no_grad():
-                hidden = th.tanh(th.einsum("nf,ahf->nah", x, reference.weight1) + reference.bias1)
-            scale = 1.0 / (1.0 + (hidden[0] ** 2).sum(-1))  # per approximator
+                scale = 1.0 / (1.0 + (hidden[0] ** 2).sum(-1))  # per approximator
             scale = scale[:, None] if pname == "weight2" else scale
             expected[pname] = p.detach() + p.grad * scale
         else:
@@ -111,7 +131,7 @@ def test_kernel_views_follow_load_state_dict_and_moves():
         other.weight.add_(1.0)
         other.rbf_widths.mul_(2.0)
     bank.load_state_dict(other.state_dict())
-    np.testing.assert_allclose(bank.numpy_kernel().forward(obs)[0], other(th.as_tensor(obs)).numpy())
+    np.testing.assert_allclose(bank.numpy_kernel().forward(obs)[0], torch_reference(other.state_dict(), th.as_tensor(obs))[1].numpy())
     bank.to(th.float64)
     assert bank.numpy_kernel() is not kernel
     clone = copy.deepcopy(bank)

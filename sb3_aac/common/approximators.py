@@ -25,9 +25,11 @@ normalised LMS rule, so a learning rate of 1 moves that sample's output all the 
 ``(0, 1]`` is stable whatever the number of features; the default rates therefore work for 10, 30 or 50 RBFs per
 input alike. Updates from the ``n`` samples of a batch (one per environment) are summed.
 
-The hot path (:class:`BankKernel`) is numpy working on zero-copy views of the CPU parameter tensors, so SB3's
-``state_dict``-based save/load keeps working while no torch op runs per step. ``forward`` is the torch twin of the
-same function, for use on other devices and as a reference.
+The parameters are torch tensors (so SB3's ``state_dict``-based save/load keeps working), but every computation is
+numpy on the CPU: the forward pass is :class:`sb3_aac.runtime.BankForward`, the one implementation of the formulas
+above, which lives in the numpy-only ``runtime.py`` so that exported policies run the very same code.
+:class:`BankKernel` adds the closed-form update and works on zero-copy views of the CPU parameter tensors, so no
+torch op runs per step. ``ApproximatorBank.forward`` runs the same numpy code and returns a tensor.
 """
 
 from __future__ import annotations
@@ -38,6 +40,8 @@ from typing import NamedTuple
 import numpy as np
 import torch as th
 from torch import nn
+
+from sb3_aac.runtime import BankForward
 
 
 def _uniform(shape: tuple[int, ...], bound: float) -> nn.Parameter:
@@ -65,8 +69,6 @@ class BankCache(NamedTuple):
 
     x: np.ndarray  # (n, F) features
     hidden: np.ndarray | None  # (n, A, H) tanh activations, None for a linear head
-
-
 
 
 class ApproximatorBank(nn.Module):
@@ -127,21 +129,21 @@ class ApproximatorBank(nn.Module):
         # load_state_dict copies in place, but the kernel's constants derived from the buffers would go stale.
         self.register_load_state_dict_post_hook(lambda module, incompatible_keys: module.invalidate_kernel())
 
-    def features(self, obs: th.Tensor) -> th.Tensor:
-        """Torch feature layer. ``obs``: ``(n, D)`` -> ``(n, F)``."""
-        x = (obs.to(th.float64) - self.obs_mid) / self.obs_half
-        if self.n_rbf is None:
-            return x
-        z = (x[:, :, None] - self.rbf_centers) / self.rbf_widths
-        return th.exp(-0.5 * z * z).reshape(len(obs), -1)
+    def arrays(self) -> dict[str, np.ndarray]:
+        """
+        The buffers and parameters by name (the names :class:`~sb3_aac.runtime.BankForward` and the export format
+        use) as numpy arrays: zero-copy views of CPU storage, copies from another device.
+        """
+        return {name: t.detach().cpu().numpy() for name, t in (*self.named_buffers(), *self.named_parameters())}
+
+    def evaluate(self, obs: np.ndarray) -> np.ndarray:
+        """Every approximator's output ``(n, A)`` for ``obs`` ``(n, D)``, with numpy (on CPU copies if stored elsewhere)."""
+        bank = self.numpy_kernel() if self.obs_mid.device.type == "cpu" else BankForward(**self.arrays())
+        return bank.outputs(bank.features(obs))[0]
 
     def forward(self, obs: th.Tensor) -> th.Tensor:
-        """Torch evaluation of every approximator. ``obs``: ``(n, D)`` -> ``(n, A)``."""
-        x = self.features(obs)
-        if self.hidden_units is None:
-            return x @ self.weight.T + self.bias
-        hidden = th.tanh(th.einsum("nf,ahf->nah", x, self.weight1) + self.bias1)
-        return (hidden * self.weight2).sum(-1) + self.bias2
+        """:meth:`evaluate` for a tensor ``(n, D)``: a float64 tensor ``(n, A)`` on ``obs``'s device (no autograd)."""
+        return th.as_tensor(self.evaluate(obs.detach().cpu().numpy()), device=obs.device)
 
     def numpy_kernel(self) -> BankKernel:
         """
@@ -167,9 +169,10 @@ class ApproximatorBank(nn.Module):
         return super()._apply(fn, recurse)
 
 
-class BankKernel:
+class BankKernel(BankForward):
     """
-    Closed-form numpy forward pass and update of an :class:`ApproximatorBank`.
+    The numpy forward pass (:class:`~sb3_aac.runtime.BankForward`) of an :class:`ApproximatorBank`, with the cache
+    and the closed-form update of training.
 
     It holds views of the bank's CPU parameters, so updates write straight into the module, and constants
     derived from its buffers (input scaling, RBF centres and widths).
@@ -178,40 +181,13 @@ class BankKernel:
     def __init__(self, bank: ApproximatorBank):
         if bank.obs_mid.device.type != "cpu":
             raise ValueError(f"The numpy kernel needs CPU tensors, the bank is on {bank.obs_mid.device}")
-        # Scaled input: obs * scale - shift.
-        scale = 1.0 / bank.obs_half.numpy()
-        shift = bank.obs_mid.numpy() * scale
-        self.rbf = bank.n_rbf is not None
-        if self.rbf:
-            # exp(-0.5 * ((obs * scale - shift - c) / w)**2) = exp(-(obs * rbf_a - rbf_b)**2)
-            inv_w = np.sqrt(0.5) / bank.rbf_widths.numpy()
-            self.rbf_a = scale[:, None] * inv_w
-            self.rbf_b = (shift[:, None] + bank.rbf_centers.numpy()) * inv_w
-        else:
-            self.scale, self.shift = scale, shift
-        self.mlp = bank.hidden_units is not None
-        a = bank.n_outputs
-        if self.mlp:
-            self.w1, self.b1 = bank.weight1.data.numpy(), bank.bias1.data.numpy()
-            self.w2, self.b2 = bank.weight2.data.numpy(), bank.bias2.data.numpy()
-            self.w1_flat, self.b1_flat = self.w1.reshape(a * bank.hidden_units, -1), self.b1.reshape(-1)
-        else:
-            self.w, self.b = bank.weight.data.numpy(), bank.bias.data.numpy()
-
-    def features(self, obs: np.ndarray) -> np.ndarray:
-        """``obs``: ``(n, D)`` -> ``(n, F)`` float64."""
-        if not self.rbf:
-            return obs * self.scale - self.shift
-        z = obs[:, :, None] * self.rbf_a - self.rbf_b
-        return np.exp(-(z * z)).reshape(len(obs), -1)
+        super().__init__(**bank.arrays())
 
     def forward(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache]:
         """``obs``: ``(n, D)`` -> outputs ``(n, A)`` and the cache for :meth:`update`."""
         x = self.features(obs)
-        if not self.mlp:
-            return x @ self.w.T + self.b, BankCache(x, None)
-        hidden = np.tanh(x @ self.w1_flat.T + self.b1_flat).reshape(len(x), *self.w2.shape)
-        return (hidden * self.w2).sum(2) + self.b2, BankCache(x, hidden)
+        out, hidden = self.outputs(x)
+        return out, BankCache(x, hidden)
 
     def update(self, cache: BankCache, err: np.ndarray, lr: np.ndarray) -> None:
         """

@@ -95,7 +95,7 @@ class SarsaAACPolicy(BasePolicy):
         return self.approximators.numpy_kernel()
 
     def forward(self, obs: PyTorchObs) -> th.Tensor:
-        """All approximator outputs ``(n, A)`` in torch (column layout in the class docstring)."""
+        """All approximator outputs ``(n, A)`` as a tensor (column layout in the class docstring), computed by numpy."""
         assert isinstance(obs, th.Tensor)
         return self.approximators(obs.reshape(len(obs), -1))
 
@@ -104,11 +104,10 @@ class SarsaAACPolicy(BasePolicy):
 
     def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache]:
         """Numpy forward pass on a batch ``(n, *obs_shape)``: outputs ``(n, A)`` and the update cache."""
+        obs = obs.reshape(len(obs), -1)
         if self.approximators.obs_mid.device.type == "cpu":
-            return self.kernel().forward(obs.reshape(len(obs), -1))
-        with th.no_grad():
-            out = self(th.as_tensor(obs, device=self.device)).cpu().numpy()
-        return out, BankCache(np.empty((len(obs), 0)), None)
+            return self.kernel().forward(obs)
+        return self.approximators.evaluate(obs), BankCache(np.empty((len(obs), 0)), None)
 
     def observation_batch(self, observation: np.ndarray) -> tuple[np.ndarray, bool]:
         """``observation`` as a float64 batch ``(n, *obs_shape)``, and whether it was a batch already."""
