@@ -65,15 +65,18 @@ CONFIG_LABELS = {
 # ~500). SarsaAAC's approximators are far smaller (at most 20 hidden units), so 64x64 is no capacity handicap.
 BASELINE_NET = [64, 64]
 
-# algo: wrapper ("flatten" or "discretize"), n_envs, SB3 keyword arguments (JSON-able; see adapters.build_baseline)
+# algo: wrapper ("flatten" or "discretize"), n_envs, SB3 keyword arguments (JSON-able; see adapters.build_baseline).
+# Every baseline steps its n_envs lanes as one batched DribbleVecEnv behind the wrapper's action space
+# (adapters.WrappedDribbleVecEnv: the same actions and physics as DummyVecEnv over the wrapped DribbleEnv, without
+# its ~100-400 us of Python per transition, which was half of A2C's and PPO's training time).
 BASELINES: dict[str, dict[str, Any]] = {
     # On-policy: 8 DummyVecEnv envs. PPO keeps SB3's 2048 transitions per rollout (8 x 256) and takes minibatches
     # of 256 instead of 64 (4x fewer gradient steps per rollout; 64 made PPO the slowest on-policy cell).
     "PPO": {"wrapper": "flatten", "n_envs": 8, "kwargs": {"n_steps": 256, "batch_size": 256}},
     # A2C: SB3 defaults (n_steps=5, i.e. 40 transitions per update with 8 envs).
     "A2C": {"wrapper": "flatten", "n_envs": 8, "kwargs": {}},
-    # Off-policy: SB3's defaults take one gradient step per env step with one env, ~300-500 env steps/s on this
-    # machine, too slow for the time box at SarsaAAC's step budget. With 16 envs and train_freq=1 they take one
+    # Off-policy: SB3's defaults take one gradient step per env step with one env, ~250-500 env steps/s on this
+    # machine (5-10 min per 150k-step cell, 30 such cells), too slow for the time box at SarsaAAC's step budget. With 16 envs and train_freq=1 they take one
     # gradient step per 16 transitions (a replay ratio of 1/16 instead of 1). That is a handicap in sample
     # efficiency we state in the report; it keeps the number of env steps equal to SarsaAAC's.
     "SAC": {
@@ -176,8 +179,12 @@ QUICK = {
     "final_episodes": 300,
 }
 
-# full: both envs, every SarsaAAC config with 5 seeds, the 6 baselines with 3 seeds, all at the same step budget.
-# Sized to about 50 minutes with 2 workers on the 2-core development machine (see the README's benchmark section).
+# full: both envs, every SarsaAAC config with 5 seeds, the 6 baselines with 3 seeds, all at 150k env steps (SarsaAAC
+# RbfPolicy reaches ~21-22 m there, ~9,000-11,000 episodes). Measured on the 2-core development machine (one
+# process, one thread, little other load): a SarsaAAC cell ~10-16 s of CPU (90 cells), a baseline cell ~70 s (A2C,
+# DQN) to ~150 s (SAC) (36 cells); about 4,800 CPU-seconds in all, i.e. ~40 min with 2 workers on two free cores,
+# longer if other jobs share them. Evaluations every 1,000 episodes (~10 points for RBF arrays, more for configs
+# with short episodes) keep their cost under ~15% of a cell.
 FULL = {
     "env_ids": ENV_IDS,
     "seeds": (0, 1, 2, 3, 4),
@@ -186,7 +193,7 @@ FULL = {
     "sarsa_budget": 150_000,
     "baseline_budget": 150_000,
     "baseline_seeds": (0, 1, 2),
-    "eval_every": 500,
+    "eval_every": 1000,
     "eval_episodes": 100,
     "final_episodes": 1000,
 }

@@ -407,7 +407,7 @@ def _init_worker() -> None:
 
 def estimated_cost(cell: Cell) -> float:
     """Rough seconds of a cell (to start the longest first, so two workers finish together)."""
-    rate = {"SarsaAAC": 8000, "PPO": 1100, "A2C": 1300, "SAC": 700, "TD3": 900, "DDPG": 800, "DQN": 1400}
+    rate = {"SarsaAAC": 10000, "PPO": 1600, "A2C": 2000, "SAC": 1000, "TD3": 1300, "DDPG": 1300, "DQN": 1800}
     return 30.0 if cell.algo == "Reference" else cell.budget / rate.get(cell.algo, 1000)
 
 
