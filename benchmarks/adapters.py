@@ -10,6 +10,7 @@ wrapped training env interpreted the same action.
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import gymnasium as gym
@@ -148,7 +149,9 @@ def baseline_env(env_id: str, algo: str, n_envs: int | None = None, seed: int = 
 def build_baseline(env_id: str, algo: str, seed: int, overrides: dict[str, Any] | None = None) -> BaseAlgorithm:
     """An untrained SB3 baseline with the hyperparameters of :data:`benchmarks.presets.BASELINES`."""
     spec = BASELINES[algo]
-    kwargs = {**spec["kwargs"], **(overrides or {})}
+    # A deep copy: SB3 writes into policy_kwargs (DDPG adds n_critics=1, SAC use_sde), which would leak into the
+    # next cell a worker runs.
+    kwargs = copy.deepcopy({**spec["kwargs"], **(overrides or {})})
     n_envs = kwargs.pop("n_envs", spec["n_envs"])
     env = baseline_env(env_id, algo, n_envs, seed, batched=kwargs.pop("batched_env", True))
     if "action_noise_sigma" in spec:
