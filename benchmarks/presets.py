@@ -174,7 +174,7 @@ QUICK = {
     "sarsa_budget": 20_000,
     "baseline_budget": 20_000,
     "baseline_seeds": (0, 1),
-    "eval_every": 200,
+    "eval_every": 500,
     "eval_episodes": 100,
     "final_episodes": 300,
 }

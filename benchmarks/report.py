@@ -294,7 +294,7 @@ def family_figure(out: Path, family: str, groups: dict[str, list[Group]], refere
         _references(ax, references.get(env_id))
         _axes_style(ax, "training episodes", _ymax(references, [env_id], fam))
         ax.set_title(f"{env_short(env_id)}\n{_budget_note(fam)}", fontsize=10)
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2, frameon=False)
     fig.suptitle(f"{FAMILY_TITLES[family]} (cf. paper {paper_fig})\nIQM over seeds with 95% bootstrap CI", fontsize=12)
     fig.tight_layout()
     fig.savefig(out / name, bbox_inches="tight")
@@ -359,7 +359,7 @@ def reliability_figure(out: Path, reliability: dict[str, Any]) -> str | None:
         ax_h.set_xlabel("metres dribbled before losing the ball (or in 35 actions)")
         ax_h.set_ylabel("share of players (%)")
         ax_h.set_title(f"{env_short(env_id)}: histogram, {next(iter(entries.values()))['players']:,} fresh players", fontsize=10)
-        ax_h.legend(loc="upper left", frameon=False)
+        ax_h.legend(loc="upper right", frameon=False)
         ax_c.set_xlim(0, last)
         ax_c.set_ylim(0, 102)
         ax_c.axvline(18, color="0.5", ls=":", lw=1)
@@ -472,7 +472,7 @@ def cost_table(groups: list[Group], reference: dict[str, Any] | None) -> str:
 def _at_episodes(group: Group, episodes: float) -> str:
     """IQM of the greedy distance at ``episodes`` training episodes, if every run got that far."""
     if min(r["curve"][-1]["episodes"] for r in group.runs) < episodes:
-        return f"(trained {fmt_int(min(r['curve'][-1]['episodes'] for r in group.runs))} episodes)"
+        return f"a seed trained fewer than {fmt_int(episodes)} episodes"
     values = np.array([np.interp(episodes, [p["episodes"] for p in r["curve"]], [p["distance_mean"] for p in r["curve"]]) for r in group.runs])
     return f"{float(iqm(values)):.1f} m at {fmt_int(episodes)} episodes"
 
