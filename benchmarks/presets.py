@@ -128,8 +128,8 @@ class Cell:
     @property
     def cell_id(self) -> str:
         env = ENV_SHORT.get(self.env_id, self.env_id)
-        if self.algo == "Reference":
-            return f"{env}__reference"
+        if self.algo == "Reference":  # its evaluation sizes differ between presets
+            return f"{env}__reference__e{self.eval_episodes}-f{self.final_episodes}"
         return f"{env}__{self.algo}-{self.config}__s{self.seed}__{budget_label(self.budget)}"
 
     @property
@@ -180,11 +180,11 @@ QUICK = {
 }
 
 # full: both envs, every SarsaAAC config with 5 seeds, the 6 baselines with 3 seeds, all at 150k env steps (SarsaAAC
-# RbfPolicy reaches ~21-22 m there, ~9,000-11,000 episodes). Measured on the 2-core development machine (one
-# process, one thread, little other load): a SarsaAAC cell ~10-16 s of CPU (90 cells), a baseline cell ~70 s (A2C,
-# DQN) to ~150 s (SAC) (36 cells); about 4,800 CPU-seconds in all, i.e. ~40 min with 2 workers on two free cores,
-# longer if other jobs share them. Evaluations every 1,000 episodes (~10 points for RBF arrays, more for configs
-# with short episodes) keep their cost under ~15% of a cell.
+# RbfPolicy reaches ~21-22 m there, ~9,000-11,000 episodes). Measured on the 2-core development machine with 2
+# workers while other jobs kept its load average at 2-3: a SarsaAAC cell 15-45 s (90 cells); baseline cells at 150k
+# steps PPO 130 s, SAC 197 s, the others ~100-150 s (36 cells); ~7,000 worker-seconds in all, i.e. ~60 min with 2
+# workers under that load, ~40-45 min on two free cores. Evaluations every 1,000 episodes (~10 points for RBF
+# arrays, more for configs and baselines with short episodes) cost under ~10% of a cell.
 FULL = {
     "env_ids": ENV_IDS,
     "seeds": (0, 1, 2, 3, 4),
