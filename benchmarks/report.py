@@ -395,9 +395,12 @@ def final_figure(out: Path, groups: dict[str, list[Group]], references: dict[str
         if ref:
             hand = ref["references"]["handcoded"]["final"]["distance_mean"]
             ceiling = ref["references"]["ceiling"]["mean"]
-            ax.axvline(hand, color="black", ls="--", lw=1.2, label=f"hand-coded ({hand:.1f} m)")
-            ax.axvline(ceiling, color="0.45", ls=":", lw=1.5, label=f"running ceiling ({ceiling:.1f} m)")
-            ax.legend(loc="upper left", bbox_to_anchor=(0.0, -0.16), ncol=2, frameon=False)
+            ax.axvline(hand, color="black", ls="--", lw=1.2)
+            ax.axvline(ceiling, color="0.45", ls=":", lw=1.5)
+            top = len(gs) - 0.35
+            ax.text(hand, top, f" hand-coded {hand:.1f} m", va="bottom", ha="left", fontsize=8.5)
+            ax.text(ceiling, top, f"running ceiling {ceiling:.1f} m ", va="bottom", ha="right", fontsize=8.5, color="0.35")
+            ax.set_ylim(-0.6, len(gs) + 0.1)
         ax.set_xlabel("final greedy dribble distance (m)")
         ax.set_xlim(0, _ymax(references, [env_id], []) if ref else None)
         ax.set_title(f"{env_short(env_id)}\n{_budget_note(groups[env_id])}", fontsize=10)
