@@ -1,0 +1,290 @@
+"""The benchmark runner and report (benchmarks/): a tiny grid end to end, resuming, atomic writes, the baseline
+adapters, and the report from synthetic cell files."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+import robocup_dribble
+from benchmarks import run as bench_run
+from benchmarks.adapters import DiscreteActionAdapter, FlatActionAdapter, baseline_env, env_action_space
+from benchmarks.presets import Cell, build_cells, select
+from benchmarks.report import build_report
+from sb3_aac import DiscretizeParameterizedAction, FlattenParameterizedAction
+
+ENV_ID = "RoboCupDribblePaper-v0"
+EVAL = {"eval_every": 100, "eval_episodes": 20, "final_episodes": 40}
+
+
+def tiny_cells() -> list[Cell]:
+    return [
+        Cell(ENV_ID, "Reference", "references", eval_episodes=20, final_episodes=40),
+        Cell(ENV_ID, "SarsaAAC", "rbf10", 0, 2000, **EVAL),
+        Cell(ENV_ID, "SarsaAAC", "rbf10", 1, 2000, **EVAL),
+        Cell(ENV_ID, "PPO", "ppo", 0, 512, **EVAL, overrides={"n_envs": 2, "n_steps": 128, "batch_size": 128, "n_epochs": 1}),
+        Cell(ENV_ID, "DQN", "dqn", 0, 512, **EVAL, overrides={"n_envs": 2, "learning_starts": 100}),
+    ]
+
+
+def mtimes(out) -> dict[str, int]:
+    return {p.name: p.stat().st_mtime_ns for p in (out / "cells").glob("*.json")}
+
+
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory):
+    """The tiny grid, run as if interrupted: first the seed-0 cells only, then everything."""
+    out = tmp_path_factory.mktemp("bench")
+    cells = tiny_cells()
+    first = bench_run.run_grid(select(cells, "s0"), out, workers=1, progress=False)
+    before = mtimes(out)
+    second = bench_run.run_grid(cells, out, workers=1, progress=False)
+    return out, cells, first, before, second
+
+
+def test_tiny_grid_writes_cells_models_and_tensorboard(tiny_run):
+    out, cells, first, _, second = tiny_run
+    assert not first["failed"] and not second["failed"]
+    results = {r["cell_id"]: r for r in bench_run.load_cells(out)}
+    assert set(results) == {c.cell_id for c in cells}
+    for cell in cells:
+        result = results[cell.cell_id]
+        assert result["cell"] == cell.to_dict()
+        assert result["versions"]["stable_baselines3"] and result["machine"]["cores"]
+        if cell.algo == "Reference":
+            refs = result["references"]
+            assert refs["handcoded"]["final"]["episodes"] == 40
+            assert refs["ceiling"]["mean"] > 20  # metres in 35 full dashes
+            continue
+        curve = result["curve"]
+        assert curve[0]["episodes"] == 0 and curve[0]["env_steps"] == 0  # a point before training
+        assert curve[-1]["env_steps"] == result["env_steps"] >= cell.budget  # and one where training ended
+        assert [p["episodes"] for p in curve] == sorted(p["episodes"] for p in curve)
+        for point in curve:
+            assert {"distance_mean", "reach20_share", "ball_loss_rate", "wall_s", "train_s"} <= set(point)
+            assert 0 <= point["reach20_share"] <= 1 and 0 <= point["ball_loss_rate"] <= 1
+        assert result["final"]["episodes"] == 40
+        assert result["predict_us"] > 0
+        assert (out / result["model"]).is_file()
+        tb = out / "tb" / cell.cell_id
+        assert any(tb.glob("events.out.tfevents.*")), f"no TensorBoard run for {cell.cell_id}"
+    # SarsaAAC trains long enough here for more than the first and last points
+    assert len(results[cells[1].cell_id]["curve"]) > 2
+
+
+def test_eval_metrics_reach_tensorboard(tiny_run):
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    out, cells, *_ = tiny_run
+    events = EventAccumulator(str(out / "tb" / cells[1].cell_id))
+    events.Reload()
+    tags = set(events.Tags()["scalars"])
+    assert {"eval/distance_mean", "eval/reach20_share", "eval/ball_loss_rate", "eval/final_distance_mean"} <= tags
+    result = json.loads((out / "cells" / f"{cells[1].cell_id}.json").read_text())
+    logged = [e.value for e in events.Scalars("eval/distance_mean")]
+    assert np.allclose(logged, [p["distance_mean"] for p in result["curve"]], atol=1e-4)
+
+
+def test_rerun_skips_finished_cells_without_rewriting_them(tiny_run):
+    out, cells, first, before, second = tiny_run
+    first_ids = {c.cell_id for c in select(cells, "s0")}
+    assert set(first["done"]) == first_ids
+    # the "interrupted" sweep's cells were skipped and left untouched; only the others ran
+    assert set(second["skipped"]) == first_ids
+    assert set(second["done"]) == {c.cell_id for c in cells} - first_ids
+    after = mtimes(out)
+    assert all(after[name] == stamp for name, stamp in before.items())
+    # a third run does nothing
+    third = bench_run.run_grid(cells, out, workers=1, progress=False)
+    assert not third["done"] and set(third["skipped"]) == {c.cell_id for c in cells}
+    assert mtimes(out) == after
+
+
+def test_report_from_the_tiny_run(tiny_run):
+    out, *_ = tiny_run
+    text = build_report(out, figures=False).read_text()  # the figures are drawn in test_report_from_synthetic_cells
+    assert "python -m benchmarks.report" in text and "PPO" in text and "DQN" in text and "hand-coded" in text
+    assert "RBF arrays (10/input)" in text and "| config |" in text
+
+
+def test_a_failing_cell_leaves_no_result_file(tmp_path):
+    bad = Cell(ENV_ID, "SarsaAAC", "rbf10", 0, 200, **EVAL, overrides={"gamma": 5.0})  # SarsaAAC rejects gamma > 1
+    status = bench_run.run_grid([bad], tmp_path, workers=1, progress=False)
+    assert status["failed"] == [bad.cell_id]
+    assert not list((tmp_path / "cells").iterdir())
+    assert "gamma" in (tmp_path / "errors" / f"{bad.cell_id}.txt").read_text()
+
+
+def test_atomic_write_keeps_the_old_file_and_no_temporary(tmp_path, monkeypatch):
+    path = tmp_path / "cells" / "x.json"
+    bench_run.atomic_write_json(path, {"a": 1})
+    with pytest.raises(ValueError):
+        bench_run.atomic_write_json(path, {"a": float("nan")})  # refused before writing
+    assert json.loads(path.read_text()) == {"a": 1}
+
+    def crash(*args):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", crash)
+    with pytest.raises(OSError):
+        bench_run.atomic_write_json(path, {"a": 2})
+    assert json.loads(path.read_text()) == {"a": 1}
+    assert [p.name for p in path.parent.iterdir()] == ["x.json"]
+
+
+def test_a_cell_that_raises_while_writing_leaves_nothing(tmp_path, monkeypatch):
+    cell = Cell(ENV_ID, "Reference", "references", eval_episodes=10, final_episodes=10)
+    real = bench_run.atomic_write_text
+
+    def write_half_then_fail(path, text):
+        if path.suffix == ".json":
+            # what a non-atomic writer would leave: half a file, then the process dies
+            monkeypatch.setattr(bench_run.os, "fsync", lambda fd: (_ for _ in ()).throw(KeyboardInterrupt()))
+        return real(path, text)
+
+    monkeypatch.setattr(bench_run, "atomic_write_text", write_half_then_fail)
+    with pytest.raises(KeyboardInterrupt):
+        bench_run.run_grid([cell], tmp_path, workers=1, progress=False)
+    assert not list((tmp_path / "cells").iterdir())  # neither the result nor a temporary file
+
+
+@pytest.mark.parametrize("wrapper", ["flatten", "discretize"])
+def test_adapters_give_the_wrappers_env_actions(wrapper):
+    space = env_action_space(ENV_ID)
+    env = robocup_dribble.DribbleEnv(profile="v11")
+    rng = np.random.default_rng(0)
+    if wrapper == "flatten":
+        wrapped = FlattenParameterizedAction(env)
+        raw = rng.uniform(-1.3, 1.3, size=(64, *wrapped.action_space.shape)).astype(np.float32)
+    else:
+        wrapped = DiscretizeParameterizedAction(env, bins=5)
+        raw = rng.integers(wrapped.action_space.n, size=64)
+
+    class Scripted:  # an SB3-like model that returns the given raw actions
+        def predict(self, obs, state=None, episode_start=None, deterministic=False):
+            return (raw[: len(obs)] if np.ndim(obs) == 2 else raw[0]), state
+
+    adapter = FlatActionAdapter(Scripted(), space) if wrapper == "flatten" else DiscreteActionAdapter(Scripted(), space, 5)
+    vec = robocup_dribble.DribbleVecEnv(64, profile="v11")
+    obs = vec.reset()
+    actions, _ = adapter.predict(obs, deterministic=True)
+    assert actions.shape == (64,)
+    for action, r in zip(actions, raw, strict=True):
+        assert space.contains(action)
+        expected = wrapped.action(r)
+        assert action[0] == expected[0]
+        for got, want in zip(action[1], expected[1], strict=True):
+            np.testing.assert_array_equal(got, want)
+    vec.step(actions)  # the env accepts them
+    single, _ = adapter.predict(obs[0])
+    assert space.contains(single) and single[0] == actions[0][0]
+
+
+@pytest.mark.parametrize("algo", ["PPO", "DQN"])
+def test_batched_baseline_env_steps_like_the_gym_wrappers(algo):
+    """One lane: the batched env and SB3's DummyVecEnv over the wrapped DribbleEnv give the same trajectory."""
+    batched = baseline_env(ENV_ID, algo, n_envs=1, seed=3)
+    reference = baseline_env(ENV_ID, algo, n_envs=1, seed=3, batched=False)
+    assert batched.action_space == reference.action_space
+    batched.action_space.seed(0)
+    np.testing.assert_allclose(batched.reset(), reference.reset())
+    dones = 0
+    for _ in range(120):
+        action = np.array([batched.action_space.sample()])
+        obs_b, rew_b, done_b, info_b = batched.step(action)
+        obs_r, rew_r, done_r, info_r = reference.step(action)
+        np.testing.assert_allclose(obs_b, obs_r, atol=1e-6)
+        np.testing.assert_allclose(rew_b, rew_r, atol=1e-5)
+        assert done_b[0] == done_r[0] and info_b[0]["distance"] == pytest.approx(info_r[0]["distance"])
+        dones += int(done_b[0])
+    assert dones > 3  # several resets were compared too
+
+
+def test_building_baselines_leaves_their_settings_alone():
+    from benchmarks.adapters import build_baseline
+    from benchmarks.presets import BASELINES
+
+    before = json.dumps(BASELINES, sort_keys=True)
+    for algo in ("DDPG", "SAC"):  # SB3 writes n_critics / use_sde into the policy_kwargs it is given
+        build_baseline(ENV_ID, algo, seed=0, overrides={"n_envs": 1, "buffer_size": 1000})
+    assert json.dumps(BASELINES, sort_keys=True) == before
+
+
+def test_presets_are_well_formed():
+    quick, full = build_cells("quick"), build_cells("full")
+    for cells in (quick, full):
+        ids = [c.cell_id for c in cells]
+        assert len(ids) == len(set(ids))
+    assert {c.env_id for c in quick} == {ENV_ID}
+    assert len({c.config for c in full if c.algo == "SarsaAAC"}) == 9
+    assert {c.algo for c in full} >= {"SarsaAAC", "PPO", "A2C", "SAC", "TD3", "DDPG", "DQN", "Reference"}
+    assert min(len({c.seed for c in full if c.config == k}) for k in ("rbf10", "mlp2", "rbfmlp20")) >= 5
+    # baselines get the same env-step budget as SarsaAAC
+    assert len({c.budget for c in full if c.algo != "Reference"}) == 1
+    assert select(full, "*SarsaAAC-rbf*") and all("rbf" in c.config for c in select(full, "*SarsaAAC-rbf*"))
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# The report from synthetic cell files
+# ---------------------------------------------------------------------------------------------------------------------
+
+
+def synthetic_cell(env_id: str, algo: str, config: str, seed: int, final: float, family: str) -> dict:
+    rate = {"rbf10": 0.004, "mlp2": 0.001}.get(config, 0.0005)
+    episodes = np.arange(0, 12_001, 500)
+    distances = final * (1 - np.exp(-rate * episodes)) + 0.3 * seed
+    curve = [
+        {"episodes": int(e), "env_steps": int(e * 14), "wall_s": e / 500, "train_s": e / 600, "distance_mean": float(d),
+         "distance_median": float(d), "distance_max": float(d + 5), "reach20_share": float(d > 20), "ball_loss_rate": 0.3}
+        for e, d in zip(episodes, distances, strict=True)
+    ]
+    cell = Cell(env_id, algo, config, seed, 168_000)
+    return {
+        "cell_id": cell.cell_id, "cell": cell.to_dict(), "family": family, "command": "python -m benchmarks.run --preset full",
+        "algo_config": {"n_envs": 8, "wrapper": "flatten", "kwargs": {}} if algo != "SarsaAAC" else {},
+        "versions": {"python": "3.11"}, "machine": {"cpu": "test CPU", "cores": 2, "platform": "linux", "torch_threads": 1},
+        "started": "2026-01-01T00:00:00", "curve": curve,
+        "final": {"episodes": 1000, "distance_mean": float(distances[-1]), "distance_median": float(distances[-1]),
+                  "distance_max": float(distances[-1] + 6), "reach20_share": 0.5, "ball_loss_rate": 0.3},
+        "env_steps": 168_000, "episodes": 12_000, "train_wall_s": 20.0, "eval_wall_s": 2.0, "predict_us": 40.0 if algo == "SarsaAAC" else 300.0,
+        "wall_s": 22.0, "loadavg": {"start": 2.0, "end": 2.5},
+    }
+
+
+def test_report_from_synthetic_cells(tmp_path):
+    cells_dir = tmp_path / "cells"
+    cells_dir.mkdir()
+    results = [synthetic_cell(ENV_ID, "SarsaAAC", "rbf10", s, 24.0, "RBF") for s in range(3)]
+    results += [synthetic_cell(ENV_ID, "SarsaAAC", "mlp2", s, 15.0, "MLP") for s in range(3)]
+    results += [synthetic_cell(ENV_ID, "DQN", "dqn", s, 26.0, "baseline") for s in range(2)]
+    reference = {
+        "cell_id": "paper__reference", "cell": Cell(ENV_ID, "Reference", "references").to_dict(), "family": "reference",
+        "references": {
+            "handcoded": {"final": {"episodes": 1000, "distance_mean": 13.0, "distance_median": 16.0, "distance_max": 27.0, "reach20_share": 0.1, "ball_loss_rate": 0.5}, "predict_us": 900.0},
+            "ceiling": {"players": 1000, "mean": 38.8, "median": 40.9, "min": 29.8, "max": 41.6, "cycles": 35},
+        },
+        "wall_s": 5.0,
+    }
+    for r in [*results, reference]:
+        (cells_dir / f"{r['cell_id']}.json").write_text(json.dumps(r))
+    counts = np.zeros(60, dtype=int)
+    counts[[3, 15, 19, 22]] = [1000, 2000, 3000, 4000]
+    entry = {"cell_id": results[0]["cell_id"], "players": 10_000, "distance_mean": 17.0, "distance_median": 19.0, "distance_max": 23.0,
+             "share_at_least": {"8": 0.9, "16": 0.7, "18": 0.7, "20": 0.4, "25": 0.0}, "ball_loss_rate": 0.6,
+             "histogram": {"bin_metres": 1.0, "counts": counts.tolist()}}
+    (tmp_path / "reliability.json").write_text(json.dumps({"seed": 30_000, "envs": {ENV_ID: {"sarsa_aac": entry, "handcoded": {**entry, "cell_id": "hand-coded"}}}}))
+
+    text = build_report(tmp_path).read_text()
+    for needle in ("| config |", "final distance (m), IQM [95% CI]", "episodes to 20 m", "decision cost (us/action)",
+                   "hand-coded dribbler", "running ceiling", "paper's claim", "RBF arrays: 25 m in under 10,000 episodes",
+                   "most players run at least 18 m", "70.0% of 10,000 players", "python -m benchmarks.run --preset full",
+                   "test CPU", "168,000 env steps"):
+        assert needle in text, needle
+    # the baseline is better here, and the report must say so
+    assert "the baseline DQN beats SarsaAAC" in text
+    assert "not reached" in text  # MLP never reaches 20 m
+    for name in ("fig_mlp.png", "fig_rbf.png", "fig_best.png", "fig_final.png", "fig_reliability.png"):
+        assert (tmp_path / name).stat().st_size > 10_000, name
