@@ -530,10 +530,17 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"sb3-aac {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
-    def add(name: str, help_text: str, epilog: str) -> argparse.ArgumentParser:
+    def add(name: str, help_text: str, epilog: str, parents: tuple[argparse.ArgumentParser, ...] = ()) -> argparse.ArgumentParser:
         return sub.add_parser(
-            name, help=help_text, description=help_text, epilog="example:\n  " + epilog, formatter_class=argparse.RawDescriptionHelpFormatter
+            name, help=help_text, description=help_text, epilog="example:\n  " + epilog,
+            formatter_class=argparse.RawDescriptionHelpFormatter, parents=list(parents),
         )
+
+    # MODEL, --profile and --seed mean the same for every command that plays a trained policy
+    played = argparse.ArgumentParser(add_help=False)
+    played.add_argument("model", metavar="MODEL", help="model.zip, an exported .aacp, or 'dribbler'")
+    played.add_argument("--profile", choices=list(PROFILE_ENV_IDS), help="server profile (default: inferred from MODEL's spaces)")
+    played.add_argument("--seed", type=seed_int, default=0, help="seed of the players, starts and noise (default: %(default)s)")
 
     train = add(
         "train",
@@ -570,31 +577,26 @@ def build_parser() -> argparse.ArgumentParser:
         "evaluate",
         "greedy metrics of MODEL on fresh heterogeneous players",
         "sb3-aac evaluate runs/rbf/model.zip --episodes 1000   |   sb3-aac evaluate dribbler --profile v11",
+        (played,),
     )
-    evaluate.add_argument("model", metavar="MODEL", help="model.zip, an exported .aacp, or 'dribbler'")
     evaluate.add_argument("--episodes", type=positive_int, default=1000, help="episodes (default: %(default)s)")
-    evaluate.add_argument("--profile", choices=list(PROFILE_ENV_IDS), help="server profile (default: inferred from MODEL's spaces)")
-    evaluate.add_argument("--seed", type=seed_int, default=0, help="seed of the evaluation env (default: %(default)s)")
     evaluate.set_defaults(func=cmd_evaluate)
 
     reliability = add(
         "reliability",
         "the paper's reliability test: fresh players dribble once each; prints a summary, plots Figs. 9-10 to a PNG",
         "sb3-aac reliability runs/rbf/model.zip --out runs/rbf/reliability.png",
+        (played,),
     )
-    reliability.add_argument("model", metavar="MODEL", help="model.zip, an exported .aacp, or 'dribbler'")
     reliability.add_argument("--players", type=positive_int, default=10_000, help="players (default: %(default)s, as the paper)")
-    reliability.add_argument("--profile", choices=list(PROFILE_ENV_IDS), help="server profile (default: inferred from MODEL)")
-    reliability.add_argument("--seed", type=seed_int, default=0, help="seed (default: %(default)s)")
     reliability.add_argument("--out", default="reliability.png", help="PNG to write (default: %(default)s)")
     reliability.set_defaults(func=cmd_reliability)
 
-    render = add("render", "play one greedy episode to a GIF/MP4 or a window", "sb3-aac render runs/rbf/model.zip --out episode.gif")
-    render.add_argument("model", metavar="MODEL", help="model.zip, an exported .aacp, or 'dribbler'")
+    render = add(
+        "render", "play one greedy episode to a GIF/MP4 or a window", "sb3-aac render runs/rbf/model.zip --out episode.gif", (played,)
+    )
     render.add_argument("--out", default="episode.gif", help="video file, .gif or .mp4 (default: %(default)s)")
     render.add_argument("--window", action="store_true", help="show the episode in a pygame window instead of writing a file")
-    render.add_argument("--profile", choices=list(PROFILE_ENV_IDS), help="server profile (default: inferred from MODEL)")
-    render.add_argument("--seed", type=seed_int, default=0, help="episode seed (default: %(default)s)")
     render.add_argument("--fps", type=positive_float, default=10.0, help="frames per second (default: %(default)s, server cycles)")
     render.set_defaults(func=cmd_render)
 
