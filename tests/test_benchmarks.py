@@ -288,3 +288,17 @@ def test_report_from_synthetic_cells(tmp_path):
     assert "not reached" in text  # MLP never reaches 20 m
     for name in ("fig_mlp.png", "fig_rbf.png", "fig_best.png", "fig_final.png", "fig_reliability.png"):
         assert (tmp_path / name).stat().st_size > 10_000, name
+
+
+def test_the_quick_preset_runs_and_reports(tmp_path):
+    """The CI-sized preset end to end, as documented: the sweep, then the report."""
+    from benchmarks import report as bench_report
+
+    out = tmp_path / "quick"
+    assert bench_run.main(["--preset", "quick", "--out", str(out), "--workers", "1"]) == 0
+    cells = sorted(p.name for p in (out / "cells").glob("*.json"))
+    assert len(cells) == len(build_cells("quick"))
+    assert bench_report.main([str(out)]) == 0
+    text = (out / "report.md").read_text()
+    assert "RBF arrays (10/input)" in text and "PPO" in text and "hand-coded" in text
+    assert (out / "fig_best.png").stat().st_size > 10_000
