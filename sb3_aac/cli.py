@@ -16,6 +16,7 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -54,34 +55,24 @@ class CliError(Exception):
 # ---------------------------------------------------------------------------------------------------------------------
 
 
-def positive_int(text: str) -> int:
-    try:
-        value = int(text.replace("_", ""))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be positive (>= 1), got {value}")
-    return value
+def _checked(parse: Callable[[str], Any], what: str, accept: Callable[[Any], bool], requirement: str) -> Callable[[str], Any]:
+    """An argparse ``type``: parse the text, then check it, with a message saying what is allowed."""
+
+    def convert(text: str) -> Any:
+        try:
+            value = parse(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if not accept(value):
+            raise argparse.ArgumentTypeError(f"must be {requirement}, got {text}")
+        return value
+
+    return convert
 
 
-def positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0 or not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
-    return value
-
-
-def seed_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
-    return value
+positive_int = _checked(lambda text: int(text.replace("_", "")), "a whole number", lambda v: v >= 1, "positive (>= 1)")
+positive_float = _checked(float, "a number", lambda v: v > 0 and math.isfinite(v), "a positive number")
+seed_int = _checked(int, "a whole number", lambda v: v >= 0, ">= 0")
 
 
 def key_value(text: str) -> tuple[str, Any]:
