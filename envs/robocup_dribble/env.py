@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import time
 from collections import deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -175,6 +177,18 @@ def _frame(lanes: DribbleLanes, lane: int, ball_trail: Iterable, player_trail: I
     )
 
 
+@contextlib.contextmanager
+def _gc_paused() -> Iterator[None]:
+    """Pause Python's cyclic garbage collector: the objects made meanwhile form no reference cycles."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
 class DribbleVecEnv(VecEnv):
     """``n_envs`` dribbling lanes stepped by one compiled call: a Stable-Baselines3 ``VecEnv``.
 
@@ -225,10 +239,11 @@ class DribbleVecEnv(VecEnv):
         self._returns += reward
         dones = lost | truncated
         lost_list, distance_list = lost.tolist(), distance.tolist()
-        infos = [
-            {"distance": d, "ball_lost": b, "player_type": t}
-            for d, b, t in zip(distance_list, lost_list, self._player_types)
-        ]
+        with _gc_paused():  # thousands of fresh dicts would otherwise set off collector passes (~25% at N=4096)
+            infos = [
+                {"distance": d, "ball_lost": b, "player_type": t}
+                for d, b, t in zip(distance_list, lost_list, self._player_types)
+            ]
         finished = np.flatnonzero(dones)
         if len(finished):
             elapsed = round(time.time() - self._t_start, 6)
