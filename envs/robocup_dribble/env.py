@@ -239,25 +239,27 @@ class DribbleVecEnv(VecEnv):
         self._returns += reward
         dones = lost | truncated
         lost_list, distance_list = lost.tolist(), distance.tolist()
-        with _gc_paused():  # thousands of fresh dicts would otherwise set off collector passes (~25% at N=4096)
+        finished = np.flatnonzero(dones)
+        # Thousands of fresh dicts and tuples per step would otherwise set off collector passes over every live
+        # object (about a quarter of the step at N=4096); none of them forms a reference cycle.
+        with _gc_paused():
             infos = [
                 {"distance": d, "ball_lost": b, "player_type": t}
                 for d, b, t in zip(distance_list, lost_list, self._player_types)
             ]
-        finished = np.flatnonzero(dones)
-        if len(finished):
-            elapsed = round(time.time() - self._t_start, 6)
-            terminal = obs[finished]  # a copy: obs rows are overwritten by the reset below
-            returns = self._returns[finished].tolist()
-            lengths = self._lanes.steps[finished].tolist()
-            timeouts = truncated[finished].tolist()
-            for j, i in enumerate(finished.tolist()):
-                info = infos[i]
-                info["terminal_observation"] = terminal[j]
-                info["TimeLimit.truncated"] = timeouts[j]
-                info["episode"] = {"r": returns[j], "l": lengths[j], "t": elapsed}
-            self._returns[finished] = 0.0
-            obs[finished] = self._start(finished)
+            if len(finished):
+                elapsed = round(time.time() - self._t_start, 6)
+                terminal = obs[finished]  # a copy: obs rows are overwritten by the reset below
+                returns = self._returns[finished].tolist()
+                lengths = self._lanes.steps[finished].tolist()
+                timeouts = truncated[finished].tolist()
+                for j, i in enumerate(finished.tolist()):
+                    info = infos[i]
+                    info["terminal_observation"] = terminal[j]
+                    info["TimeLimit.truncated"] = timeouts[j]
+                    info["episode"] = {"r": returns[j], "l": lengths[j], "t": elapsed}
+                self._returns[finished] = 0.0
+                obs[finished] = self._start(finished)
         return obs, reward.astype(np.float32), dones, infos
 
     def _start(self, lanes: np.ndarray) -> np.ndarray:
