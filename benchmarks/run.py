@@ -185,13 +185,16 @@ def loadavg() -> float | None:
 # ---------------------------------------------------------------------------------------------------------------------
 
 
+def distance_stats(d: np.ndarray) -> dict[str, float]:
+    """Mean, median and max of per-episode metres (the keys every result file uses)."""
+    return {"distance_mean": float(np.mean(d)), "distance_median": float(np.median(d)), "distance_max": float(np.max(d))}
+
+
 def report_summary(report: DribbleReport) -> dict[str, float]:
     d = report.distances
     return {
         "episodes": len(d),
-        "distance_mean": float(np.mean(d)),
-        "distance_median": float(np.median(d)),
-        "distance_max": float(np.max(d)),
+        **distance_stats(d),
         "reach20_share": report.share_reaching(REACH_METRES),
         "ball_loss_rate": report.loss_rate,
     }
@@ -517,9 +520,7 @@ def reliability_entry(policy: Any, profile: str, n_players: int, source: dict[st
     return {
         **source,
         "players": len(d),
-        "distance_mean": float(np.mean(d)),
-        "distance_median": float(np.median(d)),
-        "distance_max": float(np.max(d)),
+        **distance_stats(d),
         "share_at_least": {str(m): float(np.mean(d >= m)) for m in (8, 16, 18, 20, 25)},
         "ball_loss_rate": report.loss_rate,
         "histogram": histogram(d),
