@@ -5,7 +5,7 @@ import os
 from sb3_aac.export import export_policy
 from sb3_aac.runtime import RuntimePolicy
 from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy
-from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction
+from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction, SelectObservation
 
 with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handler:
     __version__ = file_handler.read().strip()
@@ -19,6 +19,7 @@ __all__ = [
     "RuntimePolicy",
     "SarsaAAC",
     "SarsaAACPolicy",
+    "SelectObservation",
     "__version__",
     "export_policy",
 ]

@@ -51,6 +51,7 @@ __all__ = [
     "MAX_DISCRETE_ACTIONS",
     "DiscretizeParameterizedAction",
     "FlattenParameterizedAction",
+    "SelectObservation",
     "action_to_grid",
     "action_to_scores",
     "grid_size",
@@ -364,3 +365,32 @@ class DiscretizeParameterizedAction(gym.ActionWrapper):
         values = spec.unscale(self.params_scaled[index])[spec.type_slice(k)].astype(spec.boxes[k].dtype)
         text = np.array2string(values.reshape(spec.boxes[k].shape), separator=", ", formatter={"float_kind": "{:.6g}".format})
         return f"action {index}: type {spec.start + k}, parameters {text}"
+
+
+class SelectObservation(gym.ObservationWrapper):
+    """
+    Keep one part of a ``Tuple`` observation, a ``Box``, as the whole observation.
+
+    Some parameterized-action envs observe a tuple, e.g. Platform-v0 (PyPI ``hybrid-platform``) gives
+    ``(state Box(9), step counter Discrete(200))``; SB3 and sb3-aac algorithms take a Box. P-DQN's and MP-DQN's
+    reference code keeps Platform's state part alone, as ``SelectObservation(env, 0)`` does.
+
+    :param env: An env whose observation space is a ``Tuple``
+    :param index: Which part to keep; it must be a ``Box``
+    :raises ValueError: if the observation space is not a Tuple or its part ``index`` is not a Box
+    """
+
+    def __init__(self, env: gym.Env, index: int = 0):
+        super().__init__(env)
+        space = env.observation_space
+        if not isinstance(space, spaces.Tuple):
+            raise ValueError(f"SelectObservation needs a Tuple observation space, got {space}")
+        if not 0 <= index < len(space.spaces) or not isinstance(space.spaces[index], spaces.Box):
+            boxes = [i for i, part in enumerate(space.spaces) if isinstance(part, spaces.Box)]
+            raise ValueError(f"index={index!r} must name a Box part of {space}; Box parts are at {boxes}")
+        self.index = index
+        self.observation_space = space.spaces[index]
+
+    def observation(self, observation: tuple) -> np.ndarray:
+        """The kept part of ``observation``."""
+        return np.asarray(observation[self.index], dtype=self.observation_space.dtype)

@@ -440,3 +440,29 @@ def test_exported():
     assert sb3_aac.FlattenParameterizedAction is FlattenParameterizedAction
     assert sb3_aac.DiscretizeParameterizedAction is DiscretizeParameterizedAction
     assert {"FlattenParameterizedAction", "DiscretizeParameterizedAction"} <= set(sb3_aac.__all__)
+
+
+def test_select_observation_keeps_the_box_part():
+    class TupleObsEnv(ParameterizedTargetEnv):
+        def __init__(self):
+            super().__init__()
+            self.observation_space = spaces.Tuple((self.observation_space, spaces.Discrete(5)))
+
+        def reset(self, **kwargs):
+            obs, info = super().reset(**kwargs)
+            return (obs, 0), info
+
+        def step(self, action):
+            obs, *rest = super().step(action)
+            return (obs, 1), *rest
+
+    env = sb3_aac.SelectObservation(TupleObsEnv(), 0)
+    assert env.observation_space == ParameterizedTargetEnv().observation_space
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs)
+    obs, *_ = env.step(env.action_space.sample())
+    assert env.observation_space.contains(obs)
+    with pytest.raises(ValueError, match="Box parts are at \\[0\\]"):
+        sb3_aac.SelectObservation(TupleObsEnv(), 1)
+    with pytest.raises(ValueError, match="needs a Tuple"):
+        sb3_aac.SelectObservation(ParameterizedTargetEnv())
