@@ -17,11 +17,11 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from griffe import Alias, Extension, GriffeLoader, Module, NameResolutionError, Object
+from griffe import Alias, AliasResolutionError, CyclicAliasError, Extension, GriffeLoader, Module, NameResolutionError, Object
 
 ROLE = re.compile(r":(?:class|func|meth|attr|mod|data|obj|exc|const):`(?P<body>[^`]+)`")
 TITLED_TARGET = re.compile(r"^(?P<title>.+?)\s*<(?P<target>[^<>]+)>$")
-TABLE_RULE = re.compile(r"^( *)(=+)( +=+)+ *$")
+TABLE_RULE = re.compile(r"^ *=+( +=+)+ *$")
 
 
 def _resolve(obj: Object, loader: GriffeLoader, target: str) -> str | None:
@@ -35,7 +35,12 @@ def _resolve(obj: Object, loader: GriffeLoader, target: str) -> str | None:
         except NameResolutionError:
             return None
         return f"{path}.{rest}" if rest else path
-    return member.final_target.path if isinstance(member, Alias) else member.path
+    if not isinstance(member, Alias):
+        return member.path
+    try:
+        return member.final_target.path
+    except (AliasResolutionError, CyclicAliasError):  # an import from a package that is not loaded
+        return member.target_path
 
 
 def _roles_to_autorefs(text: str, obj: Object, loader: GriffeLoader) -> str:
