@@ -27,7 +27,7 @@ TABLE_RULE = re.compile(r"^ *=+( +=+)+ *$")
 def _resolve(obj: Object, loader: GriffeLoader, target: str) -> str | None:
     """The full path of ``target`` as written in ``obj``'s docstring, or None when it cannot be resolved."""
     try:
-        member = loader.modules_collection[target]  # a full dotted path of the loaded packages
+        member: Object | Alias = loader.modules_collection[target]  # a full dotted path of the loaded packages
     except (KeyError, ValueError):
         head, _, rest = target.partition(".")
         try:
@@ -36,7 +36,7 @@ def _resolve(obj: Object, loader: GriffeLoader, target: str) -> str | None:
             return None
         return f"{path}.{rest}" if rest else path
     if not isinstance(member, Alias):
-        return member.path
+        return str(member.path)
     try:
         return member.final_target.path
     except (AliasResolutionError, CyclicAliasError):  # an import from a package that is not loaded
