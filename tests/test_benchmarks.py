@@ -257,9 +257,9 @@ def synthetic_cell(env_id: str, algo: str, config: str, seed: int, final: float,
 def test_report_from_synthetic_cells(tmp_path):
     cells_dir = tmp_path / "cells"
     cells_dir.mkdir()
-    results = [synthetic_cell(ENV_ID, "SarsaAAC", "rbf10", s, 24.0, "RBF") for s in range(3)]
+    results = [synthetic_cell(ENV_ID, "SarsaAAC", "rbf10", s, 24.0, "RBF") for s in range(10)]  # 10 seeds: a verdict
     results += [synthetic_cell(ENV_ID, "SarsaAAC", "mlp2", s, 15.0, "MLP") for s in range(3)]
-    results += [synthetic_cell(ENV_ID, "DQN", "dqn", s, 26.0, "baseline") for s in range(2)]
+    results += [synthetic_cell(ENV_ID, "DQN", "dqn", s, 26.0, "baseline") for s in range(10)]
     reference = {
         "cell_id": "paper__reference", "cell": Cell(ENV_ID, "Reference", "references").to_dict(), "family": "reference",
         "references": {
@@ -284,7 +284,8 @@ def test_report_from_synthetic_cells(tmp_path):
                    "test CPU", "168,000 env steps"):
         assert needle in text, needle
     # the baseline is better here, and the report must say so
-    assert "the baseline DQN beats SarsaAAC" in text
+    assert "the baseline DQN beats SarsaAAC" in text and "Welch's t-test on the difference" in text
+    assert "too few seeds (< 10)" in text  # the MLP claim rests on 3 seeds: no verdict
     assert "not reached" in text  # MLP never reaches 20 m
     for name in ("fig_mlp.png", "fig_rbf.png", "fig_best.png", "fig_final.png", "fig_reliability.png"):
         assert (tmp_path / name).stat().st_size > 10_000, name
