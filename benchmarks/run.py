@@ -3,6 +3,7 @@
 Usage::
 
     python -m benchmarks.run --preset quick|full [--out DIR] [--workers 2] [--only PATTERN[,PATTERN...]]
+                             [--allow-dirty]
     python -m benchmarks.run --reliability [--out DIR]      # the reliability test of the best policies
     python -m benchmarks.report DIR                         # report.md and figures from the cell files
 
@@ -17,6 +18,10 @@ cells that have one: an interrupted sweep loses only the cells that were running
 
 Cells run in worker processes (``ProcessPoolExecutor``, spawn); each pins torch and BLAS to one thread, so two
 workers use two cores. ``--workers 1`` runs the cells in this process.
+
+A sweep refuses to start when tracked files have uncommitted changes, unless ``--allow-dirty`` (recorded in every
+cell with the commit, :mod:`benchmarks.provenance`); ``DIR/runs.jsonl`` logs every invocation when it starts and
+when it ends, interrupted ones too.
 """
 
 from __future__ import annotations
@@ -30,7 +35,6 @@ import platform
 import shlex
 import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -64,6 +68,17 @@ from benchmarks.presets import (  # noqa: E402
     Cell,
     build_cells,
     select,
+)
+from benchmarks.provenance import (  # noqa: E402
+    ENV_VAR,
+    REPO,
+    DirtyTreeError,
+    cell_provenance,
+    git_state,
+    invocation_provenance,
+    logged_invocation,
+    new_invocation_id,
+    require_clean_tree,
 )
 from robocup_dribble import DribbleVecEnv  # noqa: E402
 from robocup_dribble.evaluation import DribbleReport, evaluate_dribbling, reliability_test, running_ceiling  # noqa: E402
@@ -144,17 +159,10 @@ def versions() -> dict[str, str]:
 
     import sb3_aac
 
-    repo = Path(__file__).resolve().parents[1]
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True, timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=repo, capture_output=True, text=True, timeout=10).stdout.strip()
-        commit = commit + ("+dirty" if dirty else "")
-    except (OSError, subprocess.SubprocessError):
-        commit = "unknown"
     return {
         "python": platform.python_version(),
         "sb3_aac": sb3_aac.__version__,
-        "git_commit": commit,
+        "git_commit": git_state().label,  # of the checkout this process imports (a Ray worker's own)
         "stable_baselines3": stable_baselines3.__version__,
         "torch": th.__version__,
         "numpy": np.__version__,
@@ -348,6 +356,7 @@ def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
         "final_seed": FINAL_SEED,
         "command": os.environ.get("SB3_AAC_BENCH_COMMAND", ""),
         "versions": versions(),
+        "provenance": cell_provenance(),
         "machine": machine(),
         "started": time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(started)),
     }
@@ -584,6 +593,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--list", action="store_true", help="list the cells (and whether they are finished), run nothing")
     parser.add_argument("--reliability", action="store_true", help="run the reliability test of the best policies in --out")
     parser.add_argument("--players", type=int, default=RELIABILITY_PLAYERS, help="players of the reliability test")
+    parser.add_argument("--allow-dirty", action="store_true", help="run although tracked files have uncommitted changes (recorded in each cell)")
     args = parser.parse_args(argv)
     if not args.preset and not args.reliability:
         parser.error("give --preset (run the grid) and/or --reliability")
@@ -596,17 +606,21 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{'done' if cell_path(out, cell).exists() else 'todo'}  {cell.cell_id}")
             return 0
         start = time.time()
-        status = run_grid(cells, out, args.workers)
-        log = {
-            "command": os.environ["SB3_AAC_BENCH_COMMAND"],
-            "start": time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(start)),
-            "wall_s": round(time.time() - start, 1),
-            "workers": args.workers,
-            **{k: len(v) for k, v in status.items()},
-        }
-        with open(out / "runs.jsonl", "a") as f:
-            f.write(json.dumps(log) + "\n")
-        print(f"{len(status['done'])} cells done, {len(status['skipped'])} skipped, {len(status['failed'])} failed in {log['wall_s']:.0f} s; results in {out}")
+        invocation = new_invocation_id()
+        fields = {"command": os.environ["SB3_AAC_BENCH_COMMAND"], "workers": args.workers, "allow_dirty": args.allow_dirty}
+        try:
+            with logged_invocation(out, invocation=invocation, **fields) as log:
+                state = require_clean_tree(REPO, args.allow_dirty, ignore=(out,))
+                os.environ[ENV_VAR] = json.dumps(invocation_provenance(invocation, state, args.allow_dirty))
+                try:
+                    status = run_grid(cells, out, args.workers)
+                finally:
+                    del os.environ[ENV_VAR]  # later run_grid calls of this process are not this invocation's
+                log.update({k: len(v) for k, v in status.items()})
+        except DirtyTreeError as error:
+            print(f"refused: {error}", file=sys.stderr)
+            return 2
+        print(f"{len(status['done'])} cells done, {len(status['skipped'])} skipped, {len(status['failed'])} failed in {time.time() - start:.0f} s; results in {out}")
         if status["failed"]:
             print("failed (tracebacks in errors/): " + ", ".join(status["failed"]))
     if args.reliability:

@@ -296,7 +296,7 @@ def test_the_quick_preset_runs_and_reports(tmp_path):
     from benchmarks import report as bench_report
 
     out = tmp_path / "quick"
-    assert bench_run.main(["--preset", "quick", "--out", str(out), "--workers", "1"]) == 0
+    assert bench_run.main(["--preset", "quick", "--out", str(out), "--workers", "1", "--allow-dirty"]) == 0
     cells = sorted(p.name for p in (out / "cells").glob("*.json"))
     assert len(cells) == len(build_cells("quick"))
     assert bench_report.main([str(out)]) == 0
