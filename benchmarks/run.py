@@ -3,7 +3,7 @@
 Usage::
 
     python -m benchmarks.run --preset quick|full [--out DIR] [--workers 2] [--only PATTERN[,PATTERN...]]
-                             [--allow-dirty]
+                             [--engine local|ray [--address ADDR]] [--allow-dirty]
     python -m benchmarks.run --reliability [--out DIR]      # the reliability test of the best policies
     python -m benchmarks.report DIR                         # report.md and figures from the cell files
 
@@ -17,7 +17,9 @@ cells that have one: an interrupted sweep loses only the cells that were running
 ``DIR/errors/<cell_id>.txt`` (the traceback) and is tried again by the next run.
 
 Cells run in worker processes (``ProcessPoolExecutor``, spawn); each pins torch and BLAS to one thread, so two
-workers use two cores. ``--workers 1`` runs the cells in this process.
+workers use two cores. ``--workers 1`` runs the cells in this process. ``--engine ray`` runs each cell as a Ray task
+instead, on a Ray cluster (``--address``) or a Ray instance started here with ``--workers`` CPUs; the driver writes
+every cell's files (:mod:`benchmarks.engines`).
 
 A sweep refuses to start when tracked files have uncommitted changes, unless ``--allow-dirty`` (recorded in every
 cell with the commit, :mod:`benchmarks.provenance`); ``DIR/runs.jsonl`` logs every invocation when it starts and
@@ -55,6 +57,7 @@ from stable_baselines3.common.callbacks import BaseCallback  # noqa: E402
 from stable_baselines3.common.logger import configure  # noqa: E402
 
 import robocup_dribble  # noqa: E402, F401  (registers the env ids)
+from benchmarks.engines import CellEngine, RayEngine  # noqa: E402
 from benchmarks.presets import (  # noqa: E402
     BASELINES,
     ENV_PROFILE,
@@ -437,8 +440,13 @@ def _summary_line(result: dict[str, Any]) -> str:
     )
 
 
-def run_grid(cells: list[Cell], out: str | Path, workers: int = 2, progress: bool = True) -> dict[str, list[str]]:
-    """Run the cells that have no result file yet; returns the ids ``done``, ``skipped`` (finished before) and ``failed``."""
+def run_grid(
+    cells: list[Cell], out: str | Path, workers: int = 2, progress: bool = True, engine: CellEngine | None = None
+) -> dict[str, list[str]]:
+    """Run the cells that have no result file yet; returns the ids ``done``, ``skipped`` (finished before) and ``failed``.
+
+    ``engine`` runs them elsewhere (:class:`benchmarks.engines.RayEngine`); None: the local process pool of ``workers``.
+    """
     from tqdm import tqdm
 
     out = Path(out)
@@ -464,7 +472,9 @@ def run_grid(cells: list[Cell], out: str | Path, workers: int = 2, progress: boo
             tqdm.write(f"{cell_id}: {text}")
 
     try:
-        if workers <= 1:
+        if engine is not None:
+            engine.run(todo, out, record)
+        elif workers <= 1:
             for cell in todo:
                 record(*run_cell_safely(cell.to_dict(), str(out)))
         else:
@@ -593,10 +603,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--list", action="store_true", help="list the cells (and whether they are finished), run nothing")
     parser.add_argument("--reliability", action="store_true", help="run the reliability test of the best policies in --out")
     parser.add_argument("--players", type=int, default=RELIABILITY_PLAYERS, help="players of the reliability test")
+    parser.add_argument("--engine", choices=("local", "ray"), default="local", help="local process pool, or one Ray task per cell")
+    parser.add_argument("--address", default=None, help="the Ray cluster to join (default: start Ray here with --workers CPUs)")
     parser.add_argument("--allow-dirty", action="store_true", help="run although tracked files have uncommitted changes (recorded in each cell)")
     args = parser.parse_args(argv)
     if not args.preset and not args.reliability:
         parser.error("give --preset (run the grid) and/or --reliability")
+    if args.address and args.engine != "ray":
+        parser.error("--address needs --engine ray")
     out = Path(args.out or f"runs/bench-{args.preset or 'full'}")
     os.environ["SB3_AAC_BENCH_COMMAND"] = "python -m benchmarks.run " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
     if args.preset:
@@ -607,13 +621,14 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         start = time.time()
         invocation = new_invocation_id()
-        fields = {"command": os.environ["SB3_AAC_BENCH_COMMAND"], "workers": args.workers, "allow_dirty": args.allow_dirty}
+        fields = {"command": os.environ["SB3_AAC_BENCH_COMMAND"], "workers": args.workers, "engine": args.engine, "allow_dirty": args.allow_dirty}
         try:
             with logged_invocation(out, invocation=invocation, **fields) as log:
                 state = require_clean_tree(REPO, args.allow_dirty, ignore=(out,))
                 os.environ[ENV_VAR] = json.dumps(invocation_provenance(invocation, state, args.allow_dirty))
+                engine = RayEngine(args.address, num_cpus=args.workers) if args.engine == "ray" else None
                 try:
-                    status = run_grid(cells, out, args.workers)
+                    status = run_grid(cells, out, args.workers, engine=engine)
                 finally:
                     del os.environ[ENV_VAR]  # later run_grid calls of this process are not this invocation's
                 log.update({k: len(v) for k, v in status.items()})

@@ -1,0 +1,173 @@
+"""Engines that run a grid's cells somewhere else than the driver's own process pool: Ray (issue 13 item 7).
+
+:func:`benchmarks.run.run_grid` hands the cells still to run to an engine (``engine.run(cells, out, record)``);
+without one it uses its local process pool (the default for one machine). An engine calls ``record(cell_id,
+state, payload)`` once per cell, as the local pool does: ``state`` is ``"done"`` (``payload`` the cell's result
+dict) or ``"failed"`` (``payload`` the error text).
+
+:class:`RayEngine` submits every cell as one Ray task (one CPU each). A task runs the cell in a scratch directory
+on whichever node Ray picks and returns the files it wrote as bytes (its model, TensorBoard events, and its cell
+file, or its error file); the driver writes them under ``out`` through the runner's atomic writes, the cell file
+last. So no filesystem is shared between the nodes, and a cell file still exists only once everything of its cell
+is in place. A worker node that is lost takes its running tasks with it; Ray runs them again on another node (up to
+``max_retries`` times), and a cell whose retries are exhausted is recorded as failed (``errors/<cell_id>.txt``) and
+run again by the next invocation. The tasks belong to the driver: when the driver dies, Ray cancels them, and a
+rerun skips the cells whose files were written.
+
+Ray is an optional dependency (``pip install sb3-aac[distributed]``); it is imported only when a RayEngine runs.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any, Protocol
+
+from benchmarks.presets import Cell
+
+Record = Callable[[str, str, Any], None]
+
+# Set in every Ray worker process before it starts (numpy and torch read them at import): one BLAS/OpenMP thread
+# per cell, as the local pool does (benchmarks/run.py explains why).
+WORKER_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+# Variables of the driver a cell records (the command line, the invocation's provenance), passed to every task.
+FORWARDED_ENV_PREFIX = "SB3_AAC_BENCH_"
+
+
+class CellEngine(Protocol):
+    """Runs cells and reports each one through ``record`` (see the module docstring)."""
+
+    name: str
+
+    def run(self, cells: Sequence[Cell], out: Path, record: Record) -> None: ...
+
+
+def run_cell_in_scratch(cell_data: dict[str, Any], environ: dict[str, str], scratch_root: str | None = None) -> dict[str, Any]:
+    """Run one cell in a fresh scratch directory (under ``scratch_root``, default the system's temporary directory)
+    on this machine; return its outcome and the files it wrote. An attempt killed with its node leaves its scratch
+    directory behind on that node.
+
+    :return: ``cell_id``, ``state`` and ``payload`` (as :func:`benchmarks.run.run_cell_safely`), ``files`` (path
+        relative to the results directory -> bytes) and ``node`` (the Ray node id, if in a Ray worker)
+    """
+    from benchmarks.run import run_cell_safely
+
+    os.environ.update(environ)
+    with tempfile.TemporaryDirectory(prefix="sb3-aac-cell-", dir=scratch_root) as scratch:
+        cell_id, state, payload = run_cell_safely(cell_data, scratch)
+        root = Path(scratch)
+        files = {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+    node = None
+    with contextlib.suppress(Exception):
+        import ray
+
+        node = ray.get_runtime_context().get_node_id()
+    return {"cell_id": cell_id, "state": state, "payload": payload, "files": files, "node": node}
+
+
+def write_cell_files(out: Path, cell_id: str, files: dict[str, bytes]) -> None:
+    """Write a cell's files under ``out`` atomically, its cell file (``cells/<cell_id>.json``) last.
+
+    The cell's old TensorBoard directory goes first (a run interrupted before its cell file leaves one behind), and
+    its error file once the cell has finished.
+    """
+    from benchmarks.run import replaced_atomically
+
+    cell_file = f"cells/{cell_id}.json"
+    unexpected = [name for name in files if Path(name).is_absolute() or ".." in Path(name).parts]
+    if unexpected:
+        raise ValueError(f"cell {cell_id} returned files outside its results directory: {unexpected}")
+    if cell_file in files:
+        shutil.rmtree(out / "tb" / cell_id, ignore_errors=True)
+    for name in sorted(files, key=lambda n: n == cell_file):  # the cell file last
+        target = out / name
+        with replaced_atomically(target) as tmp, open(tmp, "wb") as f:
+            f.write(files[name])
+            f.flush()
+            os.fsync(f.fileno())
+    if cell_file in files:
+        with contextlib.suppress(FileNotFoundError):
+            (out / "errors" / f"{cell_id}.txt").unlink()
+
+
+class RayEngine:
+    """Each cell a Ray task (one CPU), results written by the driver.
+
+    :param address: the Ray cluster to join (``ray.init(address=...)``, e.g. ``"auto"`` or ``"ray://host:10001"``);
+        None starts a Ray instance on this machine with ``num_cpus`` CPUs. If Ray is already initialised in this
+        process (a test's cluster), that connection is used and left open.
+    :param num_cpus: CPUs of the local instance (only without ``address``)
+    :param max_retries: how often Ray reruns a cell whose worker or node died
+    :param scratch_root: where the tasks make their scratch directories, on every node (None: its temporary directory)
+    """
+
+    name = "ray"
+
+    def __init__(
+        self, address: str | None = None, num_cpus: int | None = None, max_retries: int = 3, scratch_root: str | None = None
+    ):
+        if max_retries < 0:
+            raise ValueError(f"max_retries must be >= 0, got {max_retries}")
+        if num_cpus is not None and num_cpus < 1:
+            raise ValueError(f"num_cpus must be >= 1, got {num_cpus}")
+        self.address, self.num_cpus, self.max_retries, self.scratch_root = address, num_cpus, max_retries, scratch_root
+        self.nodes: dict[str, str | None] = {}  # cell id -> the node that ran its recorded attempt
+
+    def _connect(self) -> bool:
+        """Initialise Ray unless it already is; True if this call did (so :meth:`run` shuts it down)."""
+        import ray
+
+        if ray.is_initialized():
+            return False
+        if self.address is None:
+            ray.init(num_cpus=self.num_cpus, include_dashboard=False, log_to_driver=False)
+        else:
+            ray.init(address=self.address, log_to_driver=False)
+        return True
+
+    def run(self, cells: Sequence[Cell], out: Path, record: Record) -> None:
+        import ray
+        from ray.exceptions import RayError
+
+        started_here = self._connect()
+        environ = {k: v for k, v in os.environ.items() if k.startswith(FORWARDED_ENV_PREFIX)}
+        task = ray.remote(run_cell_in_scratch).options(
+            num_cpus=1,
+            max_retries=self.max_retries,
+            retry_exceptions=False,  # a cell's own exception is an error file, not a reason to retry
+            runtime_env={"env_vars": {**WORKER_ENV, **_python_path()}},
+        )
+        pending = {task.remote(cell.to_dict(), environ, self.scratch_root): cell.cell_id for cell in cells}
+        try:
+            while pending:
+                finished, _ = ray.wait(list(pending), num_returns=1)
+                ref = finished[0]
+                cell_id = pending.pop(ref)
+                try:
+                    outcome = ray.get(ref)
+                except RayError as error:  # retries exhausted (nodes lost again and again) or the task was cancelled
+                    text = f"Ray could not run the cell: {type(error).__name__}: {error}\n"
+                    write_cell_files(out, cell_id, {f"errors/{cell_id}.txt": text.encode()})
+                    record(cell_id, "failed", text)
+                    continue
+                write_cell_files(out, cell_id, outcome["files"])
+                self.nodes[cell_id] = outcome["node"]
+                record(cell_id, outcome["state"], outcome["payload"])
+        finally:
+            for ref in pending:
+                with contextlib.suppress(Exception):
+                    ray.cancel(ref, force=True)
+            if started_here:
+                ray.shutdown()
+
+
+def _python_path() -> dict[str, str]:
+    """The driver's ``PYTHONPATH`` made absolute (the repository checkout when run with ``PYTHONPATH=.:envs``)."""
+    value = os.environ.get("PYTHONPATH")
+    if not value:
+        return {}
+    return {"PYTHONPATH": os.pathsep.join(os.path.abspath(p) for p in value.split(os.pathsep) if p)}
