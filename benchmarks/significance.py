@@ -125,9 +125,9 @@ def probability_of_improvement(a: Any, b: Any) -> float:
 
 def _poi(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Probability of improvement of each row of ``a`` (R, n) over the same row of ``b`` (R, m)."""
-    greater = (a[:, :, None] > b[:, None, :]).mean(axis=(1, 2))
-    ties = (a[:, :, None] == b[:, None, :]).mean(axis=(1, 2))
-    return greater + 0.5 * ties
+    greater = np.mean(a[:, :, None] > b[:, None, :], axis=(1, 2))
+    ties = np.mean(a[:, :, None] == b[:, None, :], axis=(1, 2))
+    return np.asarray(greater + 0.5 * ties, dtype=float)
 
 
 def _percentile_ci(samples: np.ndarray) -> tuple[float, float]:
