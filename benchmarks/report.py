@@ -31,6 +31,7 @@ from scipy import stats
 from benchmarks.presets import BASELINES, ENV_IDS, FAMILIES, SARSA_CONFIGS, config_label
 from benchmarks.provenance import invocations
 from benchmarks.significance import MIN_SEEDS, compare, target_verdict
+from benchmarks.significance import verdict as difference_verdict
 
 BOOTSTRAP_RESAMPLES = 2000
 GRID_POINTS = 80
@@ -549,10 +550,18 @@ def paper_claims(groups: dict[str, list[Group]], reliability: dict[str, Any] | N
             rows.append([short, "MLP+RBF (10, 20 hidden): about 12 m and no more (Fig. 6)", text, verdict])
         fam_best = {f: best_group(gs, ("SarsaAAC",), f) for f in FAMILIES}
         fam_best = {f: g for f, g in fam_best.items() if g is not None}
-        if len(fam_best) > 1:
-            winner = max(fam_best, key=lambda f: float(iqm(fam_best[f].final())))
+        if len(fam_best) > 1 and "RBF" in fam_best:
+            # met only when the best RBF config beats the best config of every other family (Welch's test each)
+            outcomes = {f: difference_verdict(fam_best["RBF"].final(), g.final()) for f, g in fam_best.items() if f != "RBF"}
             text = ", ".join(f"{f}: {fmt_ci(g.final())} m" for f, g in fam_best.items())
-            rows.append([short, "RBF arrays are the best family (Fig. 8)", f"best final per family: {text}", "yes" if winner == "RBF" else f"no ({winner} is)"])
+            if "too few seeds" in outcomes.values():
+                met = _target_text("too few seeds")
+            elif all(o == "A better" for o in outcomes.values()):
+                met = "met"
+            else:
+                better = [f for f, o in outcomes.items() if o == "B better"]
+                met = f"not met ({', '.join(better)} better)" if better else "not shown (no significant difference)"
+            rows.append([short, "RBF arrays are the best family (Fig. 8)", f"best final per family: {text}", met])
         entry = (reliability or {}).get("envs", {}).get(env_id, {}).get("sarsa_aac")
         if entry:
             share = entry["share_at_least"]["18"]
