@@ -32,28 +32,65 @@ def add_tune_command(add: Callable[..., argparse.ArgumentParser]) -> None:
         "sb3-aac tune --env RoboCupDribblePaper-v0 --policy RbfPolicy --trials 30 --timesteps 50000 --storage sqlite:///study.db",
     )
     tune.add_argument("--env", default="RoboCupDribblePaper-v0", help="registered env id (default: %(default)s)")
-    tune.add_argument("--policy", default="RbfPolicy", choices=POLICIES, help="the policy whose space is searched (default: %(default)s)")
-    tune.add_argument("--trials", type=positive_int, default=20, help="finished trials the study should hold (default: %(default)s)")
-    tune.add_argument("--timesteps", type=positive_int, default=100_000, help="training steps per trial and seed (default: %(default)s)")
-    tune.add_argument("--eval-every", type=positive_int, help=f"steps between pruning evaluations (default: timesteps / {EVALUATIONS_PER_TRIAL})")
-    tune.add_argument("--eval-episodes", type=positive_int, default=100, help="episodes per greedy evaluation, the same each time (default: %(default)s)")
     tune.add_argument(
-        "--objective", metavar="KEY", help="'return', or an info key read at each episode's end (default: distance on the dribbling envs, else return)"
+        "--policy", default="RbfPolicy", choices=POLICIES, help="the policy whose space is searched (default: %(default)s)"
+    )
+    tune.add_argument(
+        "--trials", type=positive_int, default=20, help="finished trials the study should hold (default: %(default)s)"
+    )
+    tune.add_argument(
+        "--timesteps", type=positive_int, default=100_000, help="training steps per trial and seed (default: %(default)s)"
+    )
+    tune.add_argument(
+        "--eval-every",
+        type=positive_int,
+        help=f"steps between pruning evaluations (default: timesteps / {EVALUATIONS_PER_TRIAL})",
+    )
+    tune.add_argument(
+        "--eval-episodes",
+        type=positive_int,
+        default=100,
+        help="episodes per greedy evaluation, the same each time (default: %(default)s)",
+    )
+    tune.add_argument(
+        "--objective",
+        metavar="KEY",
+        help="'return', or an info key read at each episode's end (default: distance on the dribbling envs, else return)",
     )
     tune.add_argument(
         "--storage",
         default=DEFAULT_STORAGE,
-        help="database URL, or a journal file path (e.g. study.log) that processes on several machines can share (default: %(default)s)",
+        help="database URL, or a journal file (e.g. study.log) that processes on several machines can share "
+        "(default: %(default)s)",
     )
     tune.add_argument("--study-name", help="default: sarsa_aac-POLICY-ENV; the same name and storage resume a study")
     tune.add_argument("--n-envs", type=positive_int, default=16, help="envs stepped side by side (default: %(default)s)")
-    tune.add_argument("--seed", type=seed_int, default=0, help="training seed of every trial; sampler seed (default: %(default)s)")
-    tune.add_argument("--seeds-per-trial", type=positive_int, default=1, help="runs per trial, seeds SEED, SEED+1, ...; the trial scores their mean")
-    tune.add_argument("--startup-trials", type=positive_int, default=5, help="random trials before TPE and pruning start (default: %(default)s)")
     tune.add_argument(
-        "--set", metavar="KEY=VALUE", type=key_value, action="append", default=[], help="fix a hyperparameter (not searched), as train's --set"
+        "--seed", type=seed_int, default=0, help="training seed of every trial; sampler seed (default: %(default)s)"
     )
-    tune.add_argument("--gym-package", action="append", default=[], metavar="MODULE", help="import MODULE first (registers envs)")
+    tune.add_argument(
+        "--seeds-per-trial",
+        type=positive_int,
+        default=1,
+        help="runs per trial, seeds SEED, SEED+1, ...; the trial scores their mean",
+    )
+    tune.add_argument(
+        "--startup-trials",
+        type=positive_int,
+        default=5,
+        help="random trials before TPE and pruning start (default: %(default)s)",
+    )
+    tune.add_argument(
+        "--set",
+        metavar="KEY=VALUE",
+        type=key_value,
+        action="append",
+        default=[],
+        help="fix a hyperparameter (not searched), as train's --set",
+    )
+    tune.add_argument(
+        "--gym-package", action="append", default=[], metavar="MODULE", help="import MODULE first (registers envs)"
+    )
     tune.set_defaults(func=cmd_tune)
 
 
@@ -83,12 +120,16 @@ def cmd_tune(args: argparse.Namespace) -> None:
         flush=True,
     )
     try:
-        outcome = run_study(study, settings, lambda n_envs, seed: make_train_env(settings.env_id, n_envs, seed), args.trials, print_trial)
+        outcome = run_study(
+            study, settings, lambda n_envs, seed: make_train_env(settings.env_id, n_envs, seed), args.trials, print_trial
+        )
     except (ValueError, TypeError) as error:  # hyperparameters the algorithm rejects, an objective the env lacks
         raise CliError(f"trial failed: {error}") from None
     print_best(outcome.study, settings)
     if outcome.interrupted:
-        print(f"stopped by Ctrl-C; the study keeps its {finished_trials(study)} finished trials: run the same command to resume")
+        print(
+            f"stopped by Ctrl-C; the study keeps its {finished_trials(study)} finished trials: run the same command to resume"
+        )
         raise KeyboardInterrupt
 
 
@@ -124,7 +165,11 @@ def print_trial(trial: Any) -> None:
         outcome = f"{trial.value:.4g}"
     elif trial.state == TrialState.PRUNED:
         scores = list(trial.intermediate_values.values())
-        outcome = "pruned: diverged" if "diverged" in trial.user_attrs else f"pruned after {len(scores)} evaluations, last {scores[-1]:.4g}"
+        outcome = (
+            "pruned: diverged"
+            if "diverged" in trial.user_attrs
+            else f"pruned after {len(scores)} evaluations, last {scores[-1]:.4g}"
+        )
     else:
         outcome = "interrupted" if trial.user_attrs.get("interrupted") else "failed"
     print(f"trial {trial.number}: {outcome}  ({params})", flush=True)

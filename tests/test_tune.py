@@ -76,7 +76,11 @@ def test_study_resumes_from_its_storage(tmp_path: Path, capsys, storage: str) ->
     trials = stored_trials(storage)
     assert len(trials) == 3 and all(t.state == TrialState.COMPLETE for t in trials)
     for before, after in zip(first, trials, strict=False):
-        assert (before.params, before.value, before.intermediate_values) == (after.params, after.value, after.intermediate_values)
+        assert (before.params, before.value, before.intermediate_values) == (
+            after.params,
+            after.value,
+            after.intermediate_values,
+        )
     assert trials[2].params != trials[0].params  # a resumed sampler does not replay the first trials
     assert len(trials[0].intermediate_values) == 3  # 600 steps, an evaluation every 200
 
@@ -113,7 +117,12 @@ def test_best_settings_are_a_train_line_and_a_zoo_entry(tmp_path: Path, capsys) 
 def test_report_writes_small_floats_as_yaml_floats() -> None:
     yaml = pytest.importorskip("yaml")
     settings = TuneSettings(env_id=TOY, policy="RbfPolicy")
-    kwargs = {"exploration_final_eps": 1.23456e-5, "gamma": 1.0, "type_exploration": "boltzmann", "policy_kwargs": {"n_rbf": 9}}
+    kwargs = {
+        "exploration_final_eps": 1.23456e-5,
+        "gamma": 1.0,
+        "type_exploration": "boltzmann",
+        "policy_kwargs": {"n_rbf": 9},
+    }
     entry = yaml.safe_load(zoo_entry(settings, kwargs))[TOY]
     assert entry["exploration_final_eps"] == 1.235e-5 and entry["gamma"] == 1.0 and entry["type_exploration"] == "boltzmann"
     assert "--set exploration_final_eps=1.235e-05 --set gamma=1.0" in train_command(settings, kwargs)
@@ -139,7 +148,9 @@ def test_resume_with_other_settings_is_refused(tmp_path: Path, capsys) -> None:
     ],
     ids=["corrupt-sqlite", "corrupt-journal", "foreign-journal", "unwritable-sqlite", "unwritable-journal", "directory"],
 )
-def test_bad_storage_is_one_line_and_left_alone(tmp_path: Path, capsys, storage: str, content: bytes | None, message: str) -> None:
+def test_bad_storage_is_one_line_and_left_alone(
+    tmp_path: Path, capsys, storage: str, content: bytes | None, message: str
+) -> None:
     (tmp_path / "file").write_text("a regular file, so no folder can be made under it")
     for name in ("bad.db", "bad.log"):
         if content is not None:
@@ -209,7 +220,14 @@ def test_greedy_score_plays_the_same_episodes() -> None:
 
 def test_median_pruner_stops_a_trial_that_falls_behind(tmp_path: Path) -> None:
     settings = TuneSettings(
-        env_id=TOY, policy="RbfPolicy", timesteps=2000, eval_every=400, eval_episodes=20, n_envs=4, startup_trials=1, warmup_evaluations=1
+        env_id=TOY,
+        policy="RbfPolicy",
+        timesteps=2000,
+        eval_every=400,
+        eval_episodes=20,
+        n_envs=4,
+        startup_trials=1,
+        warmup_evaluations=1,
     )
     study = load_study(open_storage(f"sqlite:///{tmp_path}/study.db"), "prune", settings)
     learns = {"learning_rate": 0.5, "q_learning_rate": 0.5, "param_learning_rate": 0.5, "n_rbf": 10}
@@ -227,7 +245,9 @@ def test_median_pruner_stops_a_trial_that_falls_behind(tmp_path: Path) -> None:
 
 
 def test_several_seeds_per_trial_score_their_mean(tmp_path: Path) -> None:
-    settings = TuneSettings(env_id=TOY, policy="RbfPolicy", timesteps=400, eval_every=200, eval_episodes=5, n_envs=2, seeds_per_trial=2)
+    settings = TuneSettings(
+        env_id=TOY, policy="RbfPolicy", timesteps=400, eval_every=200, eval_episodes=5, n_envs=2, seeds_per_trial=2
+    )
     study = load_study(open_storage(f"sqlite:///{tmp_path}/study.db"), "seeds", settings)
     run_study(study, settings, toy_envs, n_trials=1)
     (trial,) = study.trials
@@ -240,7 +260,11 @@ def test_ctrl_c_ends_the_running_trial_and_keeps_the_finished_ones(tmp_path: Pat
     argv = [*TINY, "--timesteps", "40000", "--eval-every", "20000", "--trials", "5", "--storage", storage]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "envs"), os.environ.get("PYTHONPATH", "")])}
     process = subprocess.Popen(
-        [sys.executable, "-W", "ignore", "-m", "sb3_aac.cli", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+        [sys.executable, "-W", "ignore", "-m", "sb3_aac.cli", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
     )
     try:
         lines = []

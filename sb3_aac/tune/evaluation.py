@@ -26,7 +26,9 @@ def greedy_score(model: BaseAlgorithm, env: VecEnv, n_episodes: int, seed: int, 
         if objective != RETURN and local["done"]:
             info = local["info"]
             if objective not in info:
-                raise ValueError(f"objective {objective!r} is not a key of the info at an episode's end; its keys: {sorted(info)}")
+                raise ValueError(
+                    f"objective {objective!r} is not a key of the info at an episode's end; its keys: {sorted(info)}"
+                )
             values.append(float(info[objective]))
 
     env.seed(seed)

@@ -36,7 +36,9 @@ def open_storage(spec: str) -> BaseStorage:
         storage = JournalStorage(JournalFileBackend(str(path)))
         storage.get_all_studies()  # replays the journal: fails now, not mid-study
     except (OSError, ValueError, KeyError, TypeError) as error:
-        raise ValueError(f"cannot read {spec!r} as an Optuna journal file ({type(error).__name__}: {_first_line(error)})") from None
+        raise ValueError(
+            f"cannot read {spec!r} as an Optuna journal file ({type(error).__name__}: {_first_line(error)})"
+        ) from None
     return storage
 
 
@@ -60,10 +62,10 @@ def _make_parent(path: Path, spec: str) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise ValueError(f"cannot create the folder {str(path.parent)!r} for the study storage {spec!r}: {error.strerror}") from None
+        raise ValueError(
+            f"cannot create the folder {str(path.parent)!r} for the study storage {spec!r}: {error.strerror}"
+        ) from None
 
 
 def _first_line(error: BaseException) -> str:
     return str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-
-

@@ -127,7 +127,10 @@ def load_study(storage: BaseStorage, study_name: str, settings: TuneSettings) ->
     with warnings.catch_warnings():  # multivariate and constant_liar are "experimental" (stable since Optuna 2.2 and 2.8)
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         study.sampler = TPESampler(
-            n_startup_trials=settings.startup_trials, seed=settings.seed + len(study.trials), multivariate=True, constant_liar=True
+            n_startup_trials=settings.startup_trials,
+            seed=settings.seed + len(study.trials),
+            multivariate=True,
+            constant_liar=True,
         )
     return study
 
@@ -185,7 +188,14 @@ def _train_and_score(trial: optuna.Trial, settings: TuneSettings, make_env: EnvF
         try:
             model = ALGORITHMS[settings.algo](settings.policy, env, seed=seed, **kwargs)
             evaluation = TrialEvaluation(
-                trial, eval_env, settings.eval_every, settings.eval_episodes, seed + EVAL_SEED_OFFSET, settings.objective, stop, reports
+                trial,
+                eval_env,
+                settings.eval_every,
+                settings.eval_episodes,
+                seed + EVAL_SEED_OFFSET,
+                settings.objective,
+                stop,
+                reports,
             )
             try:
                 model.learn(settings.timesteps, callback=evaluation)

@@ -7,7 +7,6 @@ policy too, as the trial parameter ``policy``, then that policy's space.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any
 
 import optuna
@@ -24,9 +23,9 @@ def sample_sarsa_aac_params(trial: optuna.Trial, n_actions: int, n_envs: int, ad
     return convert_sarsa_aac_params({"policy": policy, **search_space(ALGO, policy).sample(trial)})
 
 
-def convert_sarsa_aac_params(params: Mapping[str, Any]) -> dict[str, Any]:
+def convert_sarsa_aac_params(sampled_params: dict[str, Any]) -> dict[str, Any]:
     """A trial's parameters (as :func:`sample_sarsa_aac_params` names them) as SarsaAAC keyword arguments."""
-    settings = dict(params)
+    settings = dict(sampled_params)
     policy = settings.pop("policy")
     return {"policy": policy, **search_space(ALGO, policy).to_kwargs(settings)}
 
