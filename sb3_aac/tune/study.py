@@ -92,10 +92,9 @@ class TuneSettings:
 
 @dataclass(frozen=True)
 class StudyOutcome:
-    """What a call of :func:`run_study` did: the study, the trials it ran, and whether Ctrl-C ended it."""
+    """What a call of :func:`run_study` left: the study, and whether Ctrl-C ended the call."""
 
     study: optuna.Study
-    ran: int
     interrupted: bool
 
 
@@ -155,11 +154,9 @@ def run_study(
     ``on_trial`` is called with each trial this call ends.
     """
     stop = threading.Event()
-    ran = 0
     with _stop_on_sigint(stop):
         while not stop.is_set() and finished_trials(study) < n_trials:
             trial = study.ask()
-            ran += 1
             try:
                 value = _train_and_score(trial, settings, make_env, stop)
             except optuna.TrialPruned:
@@ -173,11 +170,14 @@ def run_study(
             else:
                 study.tell(trial, value)
             on_trial(study.trials[trial.number])
-    return StudyOutcome(study, ran, stop.is_set())
+    return StudyOutcome(study, stop.is_set())
 
 
 def _train_and_score(trial: optuna.Trial, settings: TuneSettings, make_env: EnvFactory, stop: threading.Event) -> float:
-    """Train one run per seed with the trial's hyperparameters; the mean final greedy score."""
+    """
+    Train one run per seed with the trial's hyperparameters; the mean greedy score after training (evaluated again
+    even after a periodic evaluation at the last step: callbacks run before that step's update).
+    """
     params = search_space(settings.algo, settings.policy).sample(trial, settings.fixed_names())
     kwargs = settings.kwargs(params)
     scores = []
