@@ -53,6 +53,11 @@ def stored_trials(storage: str, study_name: str = STUDY) -> list:
     return optuna.load_study(study_name=study_name, storage=open_storage(storage)).trials
 
 
+def cli_env() -> dict[str, str]:
+    """The environment of a ``python -m sb3_aac.cli`` subprocess that imports this checkout."""
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "envs"), os.environ.get("PYTHONPATH", "")])}
+
+
 def run_error(capsys, argv: list[str]) -> str:
     with pytest.raises(SystemExit) as info:
         main(argv)
@@ -258,13 +263,12 @@ def test_several_seeds_per_trial_score_their_mean(tmp_path: Path) -> None:
 def test_ctrl_c_ends_the_running_trial_and_keeps_the_finished_ones(tmp_path: Path) -> None:
     storage = f"sqlite:///{tmp_path}/study.db"
     argv = [*TINY, "--timesteps", "40000", "--eval-every", "20000", "--trials", "5", "--storage", storage]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "envs"), os.environ.get("PYTHONPATH", "")])}
     process = subprocess.Popen(
         [sys.executable, "-W", "ignore", "-m", "sb3_aac.cli", *argv],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env=env,
+        env=cli_env(),
     )
     try:
         lines = []
@@ -282,6 +286,18 @@ def test_ctrl_c_ends_the_running_trial_and_keeps_the_finished_ones(tmp_path: Pat
     trials = stored_trials(storage)
     assert [t.state for t in trials] == [TrialState.COMPLETE, TrialState.FAIL]
     assert trials[1].user_attrs["interrupted"] is True and len(trials[1].intermediate_values) < 2
+
+
+def test_two_processes_share_one_journal_study(tmp_path: Path) -> None:
+    storage = str(tmp_path / "shared.log")
+    argv = [sys.executable, "-W", "ignore", "-m", "sb3_aac.cli", *TINY, "--trials", "4", "--storage", storage]
+    processes = [subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=cli_env()) for _ in range(2)]
+    for process in processes:
+        _, err = process.communicate(timeout=120)
+        assert process.returncode == 0, err
+    trials = stored_trials(storage)
+    assert 4 <= len(trials) <= 5  # each process stops once the study holds 4; both may be mid-trial then
+    assert [t.number for t in trials] == list(range(len(trials))) and all(t.state == TrialState.COMPLETE for t in trials)
 
 
 def test_rl_zoo3_sampler_is_registered_and_samples_valid_kwargs() -> None:
