@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING
 
 from sb3_aac.cli import (
     DRIBBLE_IDS,
@@ -18,6 +18,12 @@ from sb3_aac.cli import (
     positive_int,
     seed_int,
 )
+
+if TYPE_CHECKING:  # Optuna is an optional dependency: imported when the command runs
+    from optuna import Study
+    from optuna.trial import FrozenTrial
+
+    from sb3_aac.tune import TuneSettings
 
 DEFAULT_STORAGE = "sqlite:///study.db"
 EVALUATIONS_PER_TRIAL = 5  # the default --eval-every is --timesteps divided by this
@@ -98,7 +104,7 @@ def cmd_tune(args: argparse.Namespace) -> None:
     try:
         import optuna
 
-        from sb3_aac.tune import load_study, open_storage, run_study
+        from sb3_aac.tune import finished_trials, load_study, open_storage, run_study
     except ImportError as error:
         raise CliError(f"tune needs Optuna ({error}): pip install 'sb3-aac[tune]'") from None
     import_gym_packages(args.gym_package)
@@ -110,8 +116,6 @@ def cmd_tune(args: argparse.Namespace) -> None:
         study = load_study(open_storage(args.storage), study_name, settings)
     except ValueError as error:
         raise CliError(str(error)) from None
-    from sb3_aac.tune import finished_trials
-
     print(
         f"tuning SarsaAAC {settings.policy} on {settings.env_id}: {args.trials} trials of {settings.timesteps} steps x "
         f"{settings.seeds_per_trial} seed(s), {settings.n_envs} env(s); objective {settings.objective!r} on "
@@ -133,7 +137,7 @@ def cmd_tune(args: argparse.Namespace) -> None:
         raise KeyboardInterrupt
 
 
-def tune_settings(args: argparse.Namespace) -> Any:
+def tune_settings(args: argparse.Namespace) -> TuneSettings:
     from sb3_aac.tune import TuneSettings
 
     objective = args.objective or ("distance" if args.env in DRIBBLE_IDS else "return")
@@ -155,7 +159,7 @@ def tune_settings(args: argparse.Namespace) -> Any:
         raise CliError(str(error)) from None
 
 
-def print_trial(trial: Any) -> None:
+def print_trial(trial: FrozenTrial) -> None:
     from optuna.trial import TrialState
 
     from sb3_aac.tune.report import literal
@@ -175,7 +179,7 @@ def print_trial(trial: Any) -> None:
     print(f"trial {trial.number}: {outcome}  ({params})", flush=True)
 
 
-def print_best(study: Any, settings: Any) -> None:
+def print_best(study: Study, settings: TuneSettings) -> None:
     from optuna.trial import TrialState
 
     from sb3_aac.tune.report import train_command, zoo_entry
@@ -184,7 +188,7 @@ def print_best(study: Any, settings: Any) -> None:
     if not complete:
         print("no trial has completed yet, so there is no best setting")
         return
-    best = max(complete, key=lambda trial: trial.value)
+    best = study.best_trial
     kwargs = settings.kwargs(best.params)
     print(f"best of {len(complete)} completed trials: trial {best.number}, {settings.objective} {best.value:.4g}")
     print("train with it:")
