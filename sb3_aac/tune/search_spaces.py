@@ -65,12 +65,14 @@ class SearchSpace:
 ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"sarsa_aac": SarsaAAC}
 
 # SarsaAAC's rates are normalised (1 moves a linear approximator onto its target), so they are searched on (0, 1].
+# A 40-trial study of RbfPolicy on RoboCupDribblePaper-v0 (50k steps, 3 seeds a trial) put its best trials at the
+# edges of gamma >= 0.8, exploration_fraction >= 0.1 and n_rbf <= 50, so those ranges reach further.
 _SARSA_AAC = {
     "learning_rate": FloatDistribution(0.01, 1.0, log=True),
     "q_learning_rate": FloatDistribution(0.01, 1.0, log=True),
     "param_learning_rate": FloatDistribution(0.01, 1.0, log=True),
-    "gamma": FloatDistribution(0.8, 0.99),
-    "exploration_fraction": FloatDistribution(0.1, 1.0),
+    "gamma": FloatDistribution(0.7, 0.99),
+    "exploration_fraction": FloatDistribution(0.05, 1.0),
     "exploration_initial_eps": FloatDistribution(0.05, 0.5),
     "exploration_final_eps": FloatDistribution(0.0, 0.1),
     "param_noise_initial": FloatDistribution(0.05, 0.6),
@@ -84,7 +86,7 @@ SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
         _SARSA_AAC,
         {"n_rbf": IntDistribution(5, 30), "hidden_units": IntDistribution(2, 20, log=True), "rbf_width": _RBF_WIDTH},
     ),
-    ("sarsa_aac", "RbfPolicy"): SearchSpace(_SARSA_AAC, {"n_rbf": IntDistribution(5, 50), "rbf_width": _RBF_WIDTH}),
+    ("sarsa_aac", "RbfPolicy"): SearchSpace(_SARSA_AAC, {"n_rbf": IntDistribution(5, 80), "rbf_width": _RBF_WIDTH}),
 }
 
 
