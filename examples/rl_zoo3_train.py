@@ -9,6 +9,8 @@ registers ``sarsa_aac`` and the dribbling envs, then hands the command line to r
     pip install rl_zoo3
     python examples/rl_zoo3_train.py --algo sarsa_aac --env RoboCupDribblePaper-v0 --conf-file hyperparams/sarsa_aac.yml
     python examples/rl_zoo3_train.py --enjoy --algo sarsa_aac --env RoboCupDribblePaper-v0 -f logs/ --no-render
+    python examples/rl_zoo3_train.py --algo sarsa_aac --env RoboCupDribblePaper-v0 --conf-file hyperparams/sarsa_aac.yml \
+        --optimize --n-trials 20 --n-evaluations 5 --storage study.log --study-name zoo-dribble
 
 Every rl-zoo3 option works (``-n`` steps, ``--seed``, ``--tensorboard-log``, ``--eval-freq``, ``-f`` log folder,
 ``--hyperparams key:value``). rl-zoo3 wraps the env id in its own ``DummyVecEnv``; the batched
@@ -22,6 +24,7 @@ import sys
 import robocup_dribble  # noqa: F401  (registers RoboCupDribble-v0 and RoboCupDribblePaper-v0)
 from sb3_aac import SarsaAAC
 from sb3_aac.cli import register_toy_env
+from sb3_aac.tune.zoo import register_sampler
 
 try:
     import rl_zoo3
@@ -33,12 +36,16 @@ except ImportError as error:  # pragma: no cover - depends on the environment
 
 
 def register() -> None:
-    """Make ``--algo sarsa_aac`` known to rl-zoo3 (train, enjoy and the experiment manager share one dict)."""
+    """
+    Make ``--algo sarsa_aac`` known to rl-zoo3 (train, enjoy and the experiment manager share one dict), and its
+    ``--optimize`` sampler (which samples the policy too, see :mod:`sb3_aac.tune.zoo`).
+    """
     register_toy_env()  # sb3_aac/ParameterizedTarget-v0
     rl_zoo3.ALGOS["sarsa_aac"] = SarsaAAC
     rl_zoo3.train.ALGOS = rl_zoo3.ALGOS
     rl_zoo3.enjoy.ALGOS = rl_zoo3.ALGOS
     rl_zoo3.exp_manager.ALGOS = rl_zoo3.ALGOS
+    register_sampler()  # --optimize: the search spaces of sb3-aac tune
 
 
 def main() -> None:

@@ -605,6 +605,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--only", choices=("env", "runtime"), help="run one of the two benchmarks")
     bench.add_argument("--full", action="store_true", help="the full runtime benchmark (all policies and sizes; a minute)")
     bench.set_defaults(func=cmd_bench)
+
+    from sb3_aac.cli_tune import add_tune_command
+
+    add_tune_command(add)
     return parser
 
 
@@ -628,4 +632,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # Run the imported sb3_aac.cli, not this __main__ copy, so that CliError raised by sb3_aac.cli_tune is the one caught.
+    from sb3_aac.cli import main as package_main
+
+    sys.exit(package_main())

@@ -1,0 +1,28 @@
+"""
+Hyperparameter tuning with Optuna (``pip install sb3-aac[tune]``): the search spaces, the study (TPE sampler, median
+pruner on periodic greedy evaluations, resumable storage), the report of the best settings, and rl-zoo3's sampler.
+The command line is ``sb3-aac tune`` (:mod:`sb3_aac.cli_tune`).
+"""
+
+from sb3_aac.tune.evaluation import TrialEvaluation, greedy_score
+from sb3_aac.tune.report import train_command, zoo_entry
+from sb3_aac.tune.search_spaces import ALGORITHMS, SEARCH_SPACES, SearchSpace, search_space
+from sb3_aac.tune.storage import open_storage
+from sb3_aac.tune.study import StudyOutcome, TuneSettings, finished_trials, load_study, run_study
+
+__all__ = [
+    "ALGORITHMS",
+    "SEARCH_SPACES",
+    "SearchSpace",
+    "StudyOutcome",
+    "TrialEvaluation",
+    "TuneSettings",
+    "finished_trials",
+    "greedy_score",
+    "load_study",
+    "open_storage",
+    "run_study",
+    "search_space",
+    "train_command",
+    "zoo_entry",
+]

@@ -1,0 +1,71 @@
+"""Where a study lives: an SQL database URL, or an Optuna journal file that several processes or machines share."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from optuna.storages import BaseStorage, JournalStorage, RDBStorage
+from optuna.storages.journal import JournalFileBackend
+
+SQLITE_PREFIX = "sqlite:///"
+
+
+def open_storage(spec: str) -> BaseStorage:
+    """
+    The storage ``spec`` names: a database URL (``sqlite:///study.db``, ``postgresql://...``) or, for anything
+    without ``://``, the path of an Optuna journal file (``study.log``), which processes on several machines can share
+    over a network filesystem (SQLite there is unsafe). Missing folders of a file are created.
+
+    :raises ValueError: one line saying why the storage cannot be opened (unwritable place, not a study database,
+        a journal file that is not Optuna's)
+    """
+    if "://" in spec:
+        if spec.startswith(SQLITE_PREFIX):
+            _make_parent(Path(spec[len(SQLITE_PREFIX) :]), spec)
+        try:
+            return RDBStorage(spec)
+        except Exception as error:  # sqlalchemy's errors (and a driver's ImportError) have no common base
+            raise ValueError(f"cannot open the study database {spec!r}: {_first_line(error)}") from None
+    path = Path(spec)
+    if path.is_dir():
+        raise ValueError(f"the journal file {spec!r} is a directory; give a file name (e.g. study.log) or a database URL")
+    _make_parent(path, spec)
+    try:
+        _check_journal(path)
+        storage = JournalStorage(JournalFileBackend(str(path)))
+        storage.get_all_studies()  # replays the journal: fails now, not mid-study
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise ValueError(
+            f"cannot read {spec!r} as an Optuna journal file ({type(error).__name__}: {_first_line(error)})"
+        ) from None
+    return storage
+
+
+def _check_journal(path: Path) -> None:
+    """Every complete line of an existing journal is a JSON record (Optuna skips a bad last line, then appends to it)."""
+    if not path.exists():
+        return
+    with path.open("rb") as file:
+        for number, line in enumerate(file, start=1):
+            if not line.endswith(b"\n"):
+                continue  # a record another process is still writing
+            try:
+                record = json.loads(line)
+            except ValueError:
+                raise ValueError(f"line {number} is not a JSON record") from None
+            if not (isinstance(record, dict) and "op_code" in record):
+                raise ValueError(f"line {number} is not an Optuna journal record")
+
+
+def _make_parent(path: Path, spec: str) -> None:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise ValueError(
+            f"cannot create the folder {str(path.parent)!r} for the study storage {spec!r}: {error.strerror}"
+        ) from None
+
+
+def _first_line(error: BaseException) -> str:
+    return str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
