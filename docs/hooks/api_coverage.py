@@ -17,7 +17,10 @@ from mkdocs.config.defaults import MkDocsConfig
 
 PACKAGES = {"sb3_aac": Path("sb3_aac"), "robocup_dribble": Path("envs/robocup_dribble")}
 # module -> the page that documents it instead of an API rendering
-NOT_RENDERED = {"sb3_aac.cli": "cli.md (the help text of every command)"}
+NOT_RENDERED = {
+    "sb3_aac.cli": "cli.md (the help text of every command)",
+    "sb3_aac.cli_tune": "cli.md (the help text of every command)",
+}
 AUTODOC = re.compile(r"^::: *([\w.]+)", flags=re.MULTILINE)
 
 log = logging.getLogger("mkdocs.hooks.api_coverage")
