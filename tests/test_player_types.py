@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,16 +21,14 @@ from robocup_dribble.player_types import (
     generate_player_types,
     stack_player_types,
 )
+from tests.conftest import golden_file
 
-GOLDEN = Path(__file__).parents[1] / ".." / "shared" / "golden" / "rcss-player-types.json"
 SEEDS = st.integers(min_value=0, max_value=2**32 - 1)
 
 
 @pytest.fixture(scope="module")
 def golden() -> dict:
-    if not GOLDEN.exists():
-        pytest.skip(f"golden data not found at {GOLDEN}")
-    return json.loads(GOLDEN.read_text())
+    return json.loads(golden_file("rcss-player-types.json").read_text())
 
 
 def assert_matches_printed(types: list[PlayerType], printed: list[dict]) -> None:

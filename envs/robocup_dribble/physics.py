@@ -8,7 +8,7 @@ microseconds and thousands of lanes run without a Python loop.
 
 Formulas and their order follow the rcssserver source as restated in ``../shared/ref/rcssserver-physics.md``
 (cited below as "spec §n"); the numbers were checked against recordings of a real rcssserver 19.0.0
-(``../shared/golden``, replayed by ``python -m robocup_dribble.validate``). One server cycle (spec §1):
+(shipped in ``robocup_dribble/data/golden``, replayed by ``python -m robocup_dribble.validate``). One server cycle (spec §1):
 
 1. the command: a kick accelerates the ball at command time (spec §3), a turn sets the body (spec §4),
    a dash accelerates the player (spec §2; v19's two legs, spec §2.4, or the single-leg model, spec §2.3);
