@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from robocup_dribble import physics
-from robocup_dribble.env import DribbleVecEnv
+from robocup_dribble.vec_env import DribbleVecEnv
 from robocup_dribble.params import make_profile, without_noise
 from robocup_dribble.player_types import draw_type_table
 
@@ -63,7 +63,7 @@ def evaluate_dribbling(
     :param seed: seed of the evaluation env (player types, starts and noise).
     :param n_lanes: episodes run side by side.
     :param deterministic: passed to ``predict`` (greedy actions by default).
-    :param env_kwargs: further :class:`robocup_dribble.env.DribbleVecEnv` arguments (e.g. ``episodes_per_type_set``).
+    :param env_kwargs: further :class:`robocup_dribble.vec_env.DribbleVecEnv` arguments (e.g. ``episodes_per_type_set``).
     """
     if n_episodes < 1 or n_lanes < 1:
         raise ValueError(f"n_episodes and n_lanes must be >= 1, got {n_episodes} and {n_lanes}")

@@ -1,21 +1,74 @@
 """N independent dribbling lanes: the one code path under both :class:`DribbleEnv` and :class:`DribbleVecEnv`.
 
-A step runs skills -> physics -> task for all lanes at once. Each lane also keeps its heterogeneous player types:
-every ``episodes_per_type_set`` episodes it draws a fresh set with the server's generator rules, and each episode of
-the set uses a different type of it (in random order).
+A step runs skills -> physics -> task for all lanes in one compiled loop, and (if asked) starts the next episode of
+every lane whose episode ended inside the same loop: no Python object is made per lane. Each lane also keeps its
+heterogeneous player types: every ``episodes_per_type_set`` episodes it draws a fresh set with the server's generator
+rules (:func:`robocup_dribble.player_types.draw_type_set`), and each episode of the set uses a different type of it
+(in random order).
+
+Random draws (one numpy Generator, in this order, lane after lane): a step draws ``N_UNIFORMS`` uniforms per lane
+for the physics; a lane that starts an episode then draws, if its set is used up, a new type set and
+``player_types`` uniforms that order it, and then the six uniforms of its start state
+(:func:`robocup_dribble.task.start_lane`). This is stream version 2; version 1 (before the resets moved into the
+compiled loop) drew all lanes' physics uniforms first and the type sets from a pre-drawn pool.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from robocup_dribble import physics, skills, task
 from robocup_dribble.params import ServerProfile
-from robocup_dribble.player_types import PlayerType, draw_type_table
+from robocup_dribble.player_types import PlayerType, TypeRecipe, draw_type_set, type_recipe
 from robocup_dribble.task import DribbleTask
+
+RANDOM_STREAM_VERSION = 2
+"""Changes whenever the same seed would give other episodes (see the module docstring)."""
+
+
+class LaneArrays(NamedTuple):
+    """Every lane's state, one row per lane (what the compiled loop reads and writes)."""
+
+    state: np.ndarray  # (N, STATE_SIZE) physics state
+    types: np.ndarray  # (N, TYPE_SIZE) the player type of the current episode
+    type_sets: np.ndarray  # (N, player_types, TYPE_SIZE) the lane's current set of types
+    set_order: np.ndarray  # (N, player_types) int64: the set's types in the order its episodes use them (cyclically)
+    episodes_in_set: np.ndarray  # (N,) int64: episodes started since the lane's first set
+    type_ids: np.ndarray  # (N,) int64: the current episode's type id in its set
+    steps: np.ndarray  # (N,) int64: actions taken in the current episode
+    start_x: np.ndarray  # (N,) the player's x at the start of the episode
+    distance: np.ndarray  # (N,) metres dribbled along +x (frozen at the last step with the ball)
+    returns: np.ndarray  # (N,) the episode's undiscounted return so far
+
+
+class LaneSettings(NamedTuple):
+    """The constants of the compiled loop."""
+
+    k: np.ndarray  # robocup_dribble.physics.profile_constants
+    c: np.ndarray  # DribbleTask.constants
+    param_low: np.ndarray  # (N_PARAMS,) parameter bounds
+    param_high: np.ndarray
+    obs_low: np.ndarray  # (N_OBSERVATIONS,) observation bounds
+    obs_high: np.ndarray
+    recipe: TypeRecipe
+
+
+class LaneStep(NamedTuple):
+    """One step of every lane; rows of the ``episode_*`` and ``terminal_observations`` arrays are meaningful only
+    where ``terminated | truncated`` (zero elsewhere)."""
+
+    observations: np.ndarray  # (N, 10) float32; the next episode's first one where an ended lane was reset
+    rewards: np.ndarray  # (N,) float64
+    terminated: np.ndarray  # (N,) bool: the ball was lost
+    truncated: np.ndarray  # (N,) bool: max_actions reached with the ball
+    distances: np.ndarray  # (N,) the metres dribbled in the episode so far (before any reset)
+    terminal_observations: np.ndarray  # (N, 10) float32, where ended and reset (else zero)
+    episode_returns: np.ndarray  # (N,) float64
+    episode_lengths: np.ndarray  # (N,) int64
 
 
 class DribbleLanes:
@@ -23,81 +76,101 @@ class DribbleLanes:
 
     :param n_lanes: number of lanes.
     :param profile: server profile (noise already decided).
-    :param task: the task's settings.
-    :param rng: the generator every random draw comes from (types, starts, noise), in a fixed order.
+    :param task_settings: the task's settings.
+    :param rng: the generator every random draw comes from (types, starts, noise), in the order the module states.
     """
 
     def __init__(self, n_lanes: int, profile: ServerProfile, task_settings: DribbleTask, rng: np.random.Generator) -> None:
         if isinstance(n_lanes, bool) or not isinstance(n_lanes, (int, np.integer)) or n_lanes < 1:
             raise ValueError(f"n_lanes must be an integer >= 1, got {n_lanes!r}")
-        self.n_lanes = int(n_lanes)
+        self.n_lanes = n = int(n_lanes)
         self.profile = profile
         self.task = task_settings
         self.rng = rng
         self.observation_space = task.observation_space(profile, task_settings)
-        self._bounds = np.stack(skills.parameter_bounds(profile))  # (2, 7): low, high
-        self._obs_bounds = np.stack([self.observation_space.low, self.observation_space.high]).astype(np.float64)
-        self._constants = physics.profile_constants(profile)
-        self._reward_constants = task_settings.constants()
+        low, high = skills.parameter_bounds(profile)
+        self._settings = LaneSettings(
+            physics.profile_constants(profile), task_settings.constants(), low, high,
+            self.observation_space.low.astype(np.float64), self.observation_space.high.astype(np.float64),
+            type_recipe(profile),
+        )  # fmt: skip
         n_types = profile.player.player_types
-        self.state = physics.new_state(self.n_lanes)
-        self.types = np.empty((self.n_lanes, physics.TYPE_SIZE))
-        self.type_ids = np.zeros(self.n_lanes, dtype=np.int64)
-        self.type_sets = np.empty((self.n_lanes, n_types, physics.TYPE_SIZE))
-        self.set_order = np.zeros((self.n_lanes, task_settings.episodes_per_type_set), dtype=np.int64)
-        self.episodes_in_set = np.zeros(self.n_lanes, dtype=np.int64)
-        self.steps = np.zeros(self.n_lanes, dtype=np.int64)
-        self.start_x = np.zeros(self.n_lanes)
-        self.distance = np.zeros(self.n_lanes)
-        self._pool_size = min(1024, max(16, self.n_lanes))  # type sets are drawn in blocks: one call per block
-        self._set_pool = np.empty((0, n_types, physics.TYPE_SIZE))
+        self.arrays = LaneArrays(
+            state=physics.new_state(n),
+            types=np.zeros((n, physics.TYPE_SIZE)),
+            type_sets=np.zeros((n, n_types, physics.TYPE_SIZE)),
+            set_order=np.zeros((n, n_types), dtype=np.int64),
+            episodes_in_set=np.zeros(n, dtype=np.int64),
+            type_ids=np.zeros(n, dtype=np.int64),
+            steps=np.zeros(n, dtype=np.int64),
+            start_x=np.zeros(n),
+            distance=np.zeros(n),
+            returns=np.zeros(n),
+        )
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        """The per-lane arrays by name (``lanes.state``, ``lanes.type_ids``, ...)."""
+        if name in LaneArrays._fields:
+            return getattr(self.__dict__["arrays"], name)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def reseed(self, rng: np.random.Generator) -> None:
         """Draw everything from ``rng`` from now on and start new type sets in every lane."""
         self.rng = rng
-        self.episodes_in_set[:] = 0
-        self._set_pool = self._set_pool[:0]
+        self.arrays.episodes_in_set[:] = 0
 
     def reset(self, lanes: np.ndarray) -> np.ndarray:
-        """Start new episodes in ``lanes`` (indices); returns their observations ``(len(lanes), 10)``."""
-        self._next_player_types(lanes)
-        task.start_episodes(self.state, self.types, lanes, self.profile, self.task, self.rng)
-        self.steps[lanes] = 0
-        self.start_x[lanes] = self.state[lanes, physics.P_X]
-        self.distance[lanes] = 0.0
-        obs, _, _ = task.evaluate(
-            self.state[lanes], self.types[lanes], np.zeros((len(lanes), physics.EVENT_SIZE), dtype=np.bool_),
-            self.start_x[lanes], self.start_x[lanes], self.distance[lanes], self._reward_constants,
-            self.profile.server.ball_size, self._obs_bounds[0], self._obs_bounds[1],
-        )
+        """Start new episodes in ``lanes`` (distinct indices in 0..N-1); returns their observations ``(len(lanes), 10)``.
+
+        :raises ValueError: for indices that are not integers in range or repeat; nothing changes.
+        """
+        index = np.asarray(lanes)
+        if index.ndim != 1 or index.dtype.kind not in "iu":
+            raise ValueError(f"lanes must be a 1-D integer array, got {index!r:.200}")
+        index = index.astype(np.int64)
+        if len(index) and (index.min() < 0 or index.max() >= self.n_lanes):
+            raise ValueError(f"lanes must lie in 0..{self.n_lanes - 1}, got {index!r:.200}")
+        if len(np.unique(index)) != len(index):
+            raise ValueError(f"lanes must be distinct, got {index!r:.200}")
+        obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
+        _start_lanes(self.arrays, self._settings, index, self.rng, obs)
         return obs
 
-    def step(self, action_types: np.ndarray, params: np.ndarray):
-        """Advance every lane by one action (one server cycle).
+    def step(self, action_types: np.ndarray, params: np.ndarray, autoreset: bool = True) -> LaneStep:
+        """Advance every lane by one action (one server cycle); with ``autoreset`` start the next episode of every
+        lane whose episode ended.
 
         :param action_types: ``(N,)`` integers in 0..3.
         :param params: ``(N, 7)`` finite parameters; out-of-range values are clipped to the bounds.
-        :return: ``obs (N, 10) float32, reward (N,), terminated (N,), truncated (N,), distance (N,)`` (a copy).
         :raises ValueError: for a wrong shape, an action type outside 0..3 or a non-finite parameter; nothing changes.
         """
         kinds, params = self._checked(action_types, params)
         n = self.n_lanes
-        obs = np.empty((n, len(task.OBSERVATION_NAMES)), dtype=np.float32)
-        outcome = np.empty((n, 2))  # reward, distance
-        ends = np.empty((n, 2), dtype=np.bool_)  # terminated (ball lost), truncated
-        uniforms = self.rng.random((n, physics.N_UNIFORMS))
-        _advance(self.state, self.types, kinds, params, self._bounds, uniforms, self._constants, self._reward_constants,
-                 self._obs_bounds, self.start_x, self.distance, self.steps, self.task.max_actions, obs, outcome, ends)
-        return obs, outcome[:, 0], ends[:, 0], ends[:, 1], outcome[:, 1]
+        out = LaneStep(
+            observations=np.empty((n, task.N_OBSERVATIONS), dtype=np.float32),
+            rewards=np.empty(n),
+            terminated=np.empty(n, dtype=np.bool_),
+            truncated=np.empty(n, dtype=np.bool_),
+            distances=np.empty(n),
+            terminal_observations=np.zeros((n, task.N_OBSERVATIONS), dtype=np.float32),
+            episode_returns=np.zeros(n),
+            episode_lengths=np.zeros(n, dtype=np.int64),
+        )
+        _step_lanes(self.arrays, self._settings, kinds, params, self.rng, autoreset, out)
+        return out
 
     def player_type(self, lane: int) -> PlayerType:
         """The player type of a lane's current episode."""
-        return PlayerType(*self.types[lane].tolist())
+        return PlayerType(*self.arrays.types[lane].tolist())
 
     def _checked(self, action_types: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         kinds = np.asarray(action_types)
-        params = np.asarray(params, dtype=np.float64)
+        params = np.asarray(params)
+        if params.dtype.kind not in "iuf":
+            raise ValueError(f"parameters must be real numbers, got an array of {params.dtype}")
+        params = np.ascontiguousarray(params, dtype=np.float64)
         if kinds.dtype == np.int64 and kinds.shape == (self.n_lanes,) and params.shape == (self.n_lanes, skills.N_PARAMS):
+            kinds = np.ascontiguousarray(kinds)
             if _first_invalid(kinds, params) < 0:  # the common case, checked in one compiled call
                 return kinds, params
         if kinds.shape != (self.n_lanes,):
@@ -105,41 +178,18 @@ class DribbleLanes:
         if params.shape != (self.n_lanes, skills.N_PARAMS):
             raise ValueError(f"parameters must have shape ({self.n_lanes}, {skills.N_PARAMS}), got {params.shape}")
         if kinds.dtype.kind not in "iu":
-            as_int = kinds.astype(np.int64) if kinds.dtype.kind in "fb" else None
-            if as_int is None or kinds.dtype.kind == "b" or not np.array_equal(as_int, kinds):
-                raise ValueError(f"action types must be integers in 0..{skills.N_ACTION_TYPES - 1}, got {kinds!r}")
+            as_int = kinds.astype(np.int64) if kinds.dtype.kind == "f" else None
+            if as_int is None or not np.array_equal(as_int, kinds):
+                raise ValueError(f"action types must be integers in 0..{skills.N_ACTION_TYPES - 1}, got {kinds!r:.200}")
             kinds = as_int
-        bad = _first_invalid(kinds.astype(np.int64, copy=False), params)
+        kinds = np.ascontiguousarray(kinds, dtype=np.int64)
+        bad = _first_invalid(kinds, params)
         if bad >= 0:
             raise ValueError(
                 f"lane {bad}: action type {kinds[bad]!r} with parameters {params[bad]!r} is invalid; action types must be "
                 f"integers in 0..{skills.N_ACTION_TYPES - 1} and parameters finite"
             )
-        return kinds.astype(np.int64, copy=False), params
-
-    def _next_player_types(self, lanes: np.ndarray) -> None:
-        """Give each lane the next type of its set, drawing new sets where a set is used up."""
-        per_set = self.task.episodes_per_type_set
-        fresh = lanes[self.episodes_in_set[lanes] % per_set == 0]
-        if len(fresh):
-            self.type_sets[fresh] = self._take_type_sets(len(fresh))
-            n_types = self.type_sets.shape[1]
-            shuffled = np.argsort(self.rng.random((len(fresh), n_types)), axis=1)
-            self.set_order[fresh] = shuffled[:, np.arange(per_set) % n_types]  # distinct while per_set <= n_types
-        self.type_ids[lanes] = self.set_order[lanes, self.episodes_in_set[lanes] % per_set]
-        self.types[lanes] = self.type_sets[lanes, self.type_ids[lanes]]
-        self.episodes_in_set[lanes] += 1
-
-    def _take_type_sets(self, count: int) -> np.ndarray:
-        """The next ``count`` type sets of the pre-drawn pool (refilled from the lanes' generator when short)."""
-        if len(self._set_pool) < count:
-            fresh = draw_type_table(self.profile, max(self._pool_size, count - len(self._set_pool)), self._uniform)
-            self._set_pool = np.concatenate([self._set_pool, fresh])
-        taken, self._set_pool = self._set_pool[:count], self._set_pool[count:]
-        return taken
-
-    def _uniform(self, low: float, high: float, size: int) -> np.ndarray:
-        return low + (high - low) * self.rng.random(size)
+        return kinds, params
 
 
 @njit(cache=True)
@@ -154,27 +204,79 @@ def _first_invalid(kinds: np.ndarray, params: np.ndarray) -> int:
     return -1
 
 
-@njit(cache=True)
-def _advance(state, types, kinds, params, bounds, uniforms, k, reward_constants, obs_bounds, start_x, distance, steps,
-             max_actions, obs, outcome, ends) -> None:
-    """skills -> physics -> task for every lane, in one compiled loop.
+# The kernels unpack the NamedTuples once at the top: reading an array out of a tuple costs a reference-count
+# update, which per lane and field would cost more than the physics.
 
-    Writes ``obs``, ``outcome[:, 0]`` (reward), ``outcome[:, 1]`` (distance), ``ends[:, 0]`` (ball lost) and
-    ``ends[:, 1]`` (truncated); advances ``state``, ``distance`` and ``steps`` in place.
-    """
-    command = np.empty(physics.COMMAND_SIZE)
-    clipped = np.empty(params.shape[1])
-    events = np.empty(physics.EVENT_SIZE, dtype=np.bool_)
-    ball_size = k[physics.K_BALL_SIZE]
+
+@njit(cache=True, error_model="numpy")
+def _start_lane(a: LaneArrays, k, c, recipe, i: int, rng, order_keys, no_buffer, position) -> None:
+    """Start lane ``i``'s next episode: its next player type (a fresh set when the set is used up), its start state
+    and its episode statistics. ``order_keys`` (``player_types`` floats), ``no_buffer`` (empty) and ``position`` (one
+    int) are scratch, so that :func:`draw_type_set` draws from the Generator."""
+    state, types, type_sets, set_order, episodes_in_set, type_ids, steps, start_x, distance, returns = a
+    n_types = type_sets.shape[1]
+    episode = episodes_in_set[i] % int(c[task.R_EPISODES_PER_TYPE_SET])
+    if episode == 0:
+        draw_type_set(recipe, rng, no_buffer, position, type_sets, i)
+        for j in range(n_types):
+            order_keys[j] = rng.random()
+        set_order[i, :] = np.argsort(order_keys)
+    type_id = set_order[i, episode % n_types]  # distinct while episodes_per_type_set <= player_types
+    type_ids[i] = type_id
+    for f in range(types.shape[1]):
+        types[i, f] = type_sets[i, type_id, f]
+    episodes_in_set[i] += 1
+    task.start_lane(state, i, types, i, rng, c, k)
+    steps[i] = 0
+    start_x[i] = state[i, physics.P_X]
+    distance[i] = 0.0
+    returns[i] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _start_lanes(a: LaneArrays, g: LaneSettings, lanes: np.ndarray, rng, obs: np.ndarray) -> None:
+    k, c, _, _, obs_low, obs_high, recipe = g
+    state, types = a.state, a.types
+    order_keys, no_buffer, position = np.empty(a.type_sets.shape[1]), np.empty(0), np.zeros(1, dtype=np.int64)
+    for row in range(lanes.shape[0]):
+        i = lanes[row]
+        _start_lane(a, k, c, recipe, i, rng, order_keys, no_buffer, position)
+        task.observe(state, i, types, i, obs_low, obs_high, obs, row)
+
+
+@njit(cache=True, error_model="numpy")
+def _step_lanes(a: LaneArrays, g: LaneSettings, kinds, params, rng, autoreset: bool, out: LaneStep) -> None:
+    """skills -> physics -> task for every lane, then the next episode's start where one ended (if ``autoreset``)."""
+    state, types, _, _, _, _, steps, start_x, distance, returns = a
+    k, c, param_low, param_high, obs_low, obs_high, recipe = g
+    obs, rewards, terminated, truncated, distances, terminal_obs, episode_returns, episode_lengths = out
+    uniforms = np.empty((1, physics.N_UNIFORMS))
+    order_keys, no_buffer, position = np.empty(a.type_sets.shape[1]), np.empty(0), np.zeros(1, dtype=np.int64)
+    max_actions = c[task.R_MAX_ACTIONS]
     for i in range(state.shape[0]):
-        s, t = state[i], types[i]
-        for j in range(clipped.shape[0]):
-            clipped[j] = min(max(params[i, j], bounds[0, j]), bounds[1, j])
-        skills.command_lane(s, t, kinds[i], clipped, k, command)
-        previous_x = s[physics.P_X]
-        physics.step_lane(s, t, command, uniforms[i], k, events)
-        reward, lost = task.evaluate_lane(s, t, events, previous_x, start_x[i], distance[i:i + 1], reward_constants,
-                                          ball_size, obs_bounds[0], obs_bounds[1], obs[i])
+        kind = kinds[i]
+        first = skills.PARAM_STARTS[kind]
+        p0 = min(max(params[i, first], param_low[first]), param_high[first])
+        p1 = 0.0
+        if skills.PARAM_WIDTHS[kind] > 1:
+            p1 = min(max(params[i, first + 1], param_low[first + 1]), param_high[first + 1])
+        c_kind, power, direction = skills.command(state, i, types, i, kind, p0, p1, k)
+        for j in range(physics.N_UNIFORMS):
+            uniforms[0, j] = rng.random()
+        previous_x = state[i, physics.P_X]
+        collided, _ = physics.cycle(state, i, types, i, c_kind, power, direction, uniforms, 0, k)
+        reward, lost = task.evaluate(state, i, types, i, collided, previous_x, c, k)
+        if not lost:
+            distance[i] = state[i, physics.P_X] - start_x[i]
         steps[i] += 1
-        outcome[i, 0], outcome[i, 1] = reward, distance[i]
-        ends[i, 0], ends[i, 1] = lost, steps[i] >= max_actions and not lost
+        returns[i] += reward
+        ended_by_limit = steps[i] >= max_actions and not lost
+        rewards[i], terminated[i], truncated[i], distances[i] = reward, lost, ended_by_limit, distance[i]
+        task.observe(state, i, types, i, obs_low, obs_high, obs, i)
+        if lost or ended_by_limit:
+            episode_returns[i], episode_lengths[i] = returns[i], steps[i]
+            if autoreset:
+                for j in range(obs.shape[1]):
+                    terminal_obs[i, j] = obs[i, j]
+                _start_lane(a, k, c, recipe, i, rng, order_keys, no_buffer, position)
+                task.observe(state, i, types, i, obs_low, obs_high, obs, i)

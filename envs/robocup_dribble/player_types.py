@@ -20,8 +20,9 @@ from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
-from .params import EPS, ServerProfile, make_profile
+from .params import EPS, ServerProfile, kickable_radius, make_profile
 
 MAX_TRIALS = 1000  # rcssserver HeteroPlayer::HeteroPlayer()
 
@@ -48,7 +49,7 @@ class PlayerType(NamedTuple):
 
     def kickable_area(self, ball_size: float) -> float:
         """Kickable radius: player_size + ball_size + kickable_margin (m)."""
-        return self.player_size + ball_size + self.kickable_margin
+        return kickable_radius(self.player_size, ball_size, self.kickable_margin)
 
     @property
     def terminal_speed(self) -> float:
@@ -127,6 +128,13 @@ class ServerRandom:
 
     __call__ = uniform
 
+    def unread(self, n: int) -> None:
+        """Give back the last ``n`` values of the latest call (at most its size): the next call returns them again."""
+        if not 0 <= n <= self._pos:
+            raise ValueError(f"cannot give back {n} values, {self._pos} are buffered")
+        self._pos -= n
+        self.used -= n
+
 
 def _steps(profile: ServerProfile) -> list:
     """Spec §7.2 steps 1-8 in the server's order: ``((delta min, delta max), [(column, a, b, rule), ...])``.
@@ -165,95 +173,157 @@ def _steps(profile: ServerProfile) -> list:
     ]  # fmt: skip
 
 
-class _Recipe(NamedTuple):
-    lo: np.ndarray  # (n_steps, 1) each step's lower delta bound (its delta when min == max)
-    segments: list  # [(steps, lo, span, checks)]: draw the deltas of steps in one call, then the checks
-    src: np.ndarray  # (F,) the step that sets each column: column = a + delta[src] * b
-    a: np.ndarray  # (F, 1)
-    b: np.ndarray  # (F, 1)
-    window: tuple[float, float] | None  # (max_power, player_speed_max_min - EPS); None: accept every type
+class TypeRecipe(NamedTuple):
+    """Spec §7.2 as arrays for the compiled generator (:func:`type_recipe`; numba takes arrays, not lists).
+
+    Step ``i`` draws ``delta = step_lo[i] + step_span[i] * u`` (no draw when ``step_span[i] == 0``); term ``j`` of
+    step ``term_step[j]`` computes ``term_a[j] + delta * term_b[j]``, rejects the trial unless it is ``> 0``
+    (``term_rule[j] == 1``) or ``>= 0`` (``2``) and sets column ``term_column[j]`` (-1: none) of the type. With
+    ``window[0]`` = 1 a type is kept only if its terminal speed lies in (``window[2]``, speed max + EPS) for
+    ``max_power = window[1]`` (step 9).
+    """
+
+    default: np.ndarray  # (F,) type 0
+    step_lo: np.ndarray
+    step_span: np.ndarray
+    term_step: np.ndarray
+    term_column: np.ndarray
+    term_a: np.ndarray
+    term_b: np.ndarray
+    term_rule: np.ndarray
+    window: np.ndarray
 
 
-def _passes(value, strict: bool):
-    """The rejection rule of spec §7.2: a value must be > 0 (strict) or >= 0; for floats and arrays."""
-    return value > 0.0 if strict else value >= 0.0
+_RULES = {"": 0, ">0": 1, ">=0": 2}
 
 
 @functools.lru_cache(maxsize=16)
-def _recipe(profile: ServerProfile) -> _Recipe:
-    """:func:`_steps` arranged for drawing many sets at once (computed once per profile)."""
+def type_recipe(profile: ServerProfile) -> TypeRecipe:
+    """:func:`_steps` of ``profile`` as a :class:`TypeRecipe` (computed once per profile)."""
     steps = _steps(profile)
     lo = np.array([min(bounds) for bounds, _ in steps])  # the server swaps reversed bounds
     span = np.array([max(bounds) for bounds, _ in steps]) - lo
-    segments, drawn = [], []
-    for i, (_, terms) in enumerate(steps):
-        if span[i]:
-            drawn.append(i)
-        checks = []
-        for _, a, b, rule in terms:
-            # a + d * b is monotone in d, and a drawn d = lo + span * u lies in [lo, lo + span]: a check that passes
-            # at both ends never rejects and is left out, so the draws up to the next check that can fail are one call.
-            if rule and not all(_passes(a + d * b, rule == ">0") for d in (lo[i], lo[i] + span[i])):
-                checks.append((i, a, b, rule == ">0"))
-        if checks or i == len(steps) - 1:
-            segments.append((np.array(drawn, dtype=np.intp), lo[drawn, None], span[drawn, None], checks))
-            drawn = []
-    columns = {column: (i, a, b) for i, (_, terms) in enumerate(steps) for column, a, b, _ in terms if column}
-    src, a, b = zip(*(columns[name] for name in TYPE_FIELDS))
+    terms = [(i, -1 if column is None else TYPE_FIELDS.index(column), a, b, _RULES[rule])
+             for i, (_, step_terms) in enumerate(steps) for column, a, b, rule in step_terms]
+    step_of, column, a, b, rule = (np.array(values) for values in zip(*terms))
     s = profile.server
-    window = (s.max_power, s.player_speed_max_min - EPS) if profile.hetero_acceptance == "speed_window" else None
-    return _Recipe(lo[:, None], segments, np.array(src), np.array(a)[:, None], np.array(b)[:, None], window)
+    window = np.array([float(profile.hetero_acceptance == "speed_window"), s.max_power, s.player_speed_max_min - EPS])
+    default = np.array(default_player_type(profile), dtype=np.float64)
+    return TypeRecipe(default, lo, span, step_of.astype(np.int64), column.astype(np.int64), a.astype(np.float64),
+                      b.astype(np.float64), rule.astype(np.int64), window)
 
 
-def _trial(r: _Recipe, sets: np.ndarray, uniform: Uniform) -> tuple[np.ndarray, np.ndarray]:
-    """One trial (spec §7.2 steps 1-9) for each of ``sets``: the sets that accepted their type and the types ``(F, n)``.
+@njit(cache=True, error_model="numpy", inline="always")
+def _next_uniform(rng, buffer: np.ndarray, position: np.ndarray) -> float:
+    """The next U[0, 1) value: from ``buffer`` at ``position[0]`` if the buffer is not empty (0.5 once it is used up,
+    with ``position[0]`` counting on so the caller sees it ran short), else from the numpy Generator ``rng``."""
+    if buffer.shape[0] == 0:
+        return rng.random()
+    p = position[0]
+    position[0] = p + 1
+    return buffer[p] if p < buffer.shape[0] else 0.5
 
-    A set rejected by a check draws nothing more in this trial; the draws of one call are laid out step-major,
-    so a single set takes the values from the stream in the server's order.
+
+@njit(cache=True, error_model="numpy")
+def draw_type_set(recipe: TypeRecipe, rng, buffer: np.ndarray, position: np.ndarray, out: np.ndarray, row: int) -> None:
+    """Draw one set of player types into ``out[row]`` (``(player_types, F)``), the server's way (spec §7.2).
+
+    Type 0 is the default type; types 1.. are drawn one after the other, each by up to ``MAX_TRIALS`` trials (a type
+    whose trials all fail stays the default type). The uniforms come from :func:`_next_uniform` in the server's
+    order, so with ``buffer`` holding :class:`ServerRandom`'s stream this is the server's set, value for value.
     """
-    delta = np.empty((r.lo.size, sets.size))
-    delta[:] = r.lo  # a step without a draw keeps its one value
-    for steps, lo, span, checks in r.segments:
-        if steps.size and sets.size:
-            delta[steps] = lo + span * uniform(0.0, 1.0, steps.size * sets.size).reshape(steps.size, -1)
-        for step, a, b, strict in checks:
-            ok = _passes(a + delta[step] * b, strict)
-            sets, delta = sets[ok], delta[:, ok]
-    t = r.a + delta[r.src] * r.b  # with b == 1, a + d * 1 is a + d exactly, as the server computes it
-    if r.window is None:
-        return sets, t
-    max_power, v_min = r.window  # step 9
-    v = (max_power * t[_DASH_POWER_RATE] * t[_EFFORT_MAX]) / (1.0 - t[_DECAY])
-    inside = (v_min < v) & (v < t[_SPEED_MAX] + EPS)
-    return sets[inside], t[:, inside]
+    default, step_lo, step_span, term_step, term_column, term_a, term_b, term_rule, window = recipe  # unpacked once:
+    # reading an array out of the tuple in the loops would update its reference count every time
+    n_types, n_fields = out.shape[1], out.shape[2]
+    n_steps, n_terms = step_lo.shape[0], term_step.shape[0]
+    delta = np.empty(n_steps)
+    for type_id in range(n_types):
+        for f in range(n_fields):
+            out[row, type_id, f] = default[f]
+    for type_id in range(1, n_types):
+        for _ in range(MAX_TRIALS):
+            ok = True
+            term = 0
+            for step in range(n_steps):
+                d = step_lo[step]
+                if step_span[step] != 0.0:
+                    d = step_lo[step] + step_span[step] * _next_uniform(rng, buffer, position)
+                delta[step] = d
+                while term < n_terms and term_step[term] == step:
+                    value = term_a[term] + d * term_b[term]
+                    rule = term_rule[term]
+                    if (rule == 1 and not value > 0.0) or (rule == 2 and not value >= 0.0):
+                        ok = False
+                    term += 1
+                if not ok:
+                    break
+            if not ok:
+                continue
+            if window[0] > 0.5:  # step 9: the terminal speed must lie in the acceptance window
+                dash_power_rate = effort_max = decay = speed_max = 0.0
+                for term in range(n_terms):
+                    c = term_column[term]
+                    value = term_a[term] + delta[term_step[term]] * term_b[term]
+                    if c == _DASH_POWER_RATE:
+                        dash_power_rate = value
+                    elif c == _EFFORT_MAX:
+                        effort_max = value
+                    elif c == _DECAY:
+                        decay = value
+                    elif c == _SPEED_MAX:
+                        speed_max = value
+                v = (window[1] * dash_power_rate * effort_max) / (1.0 - decay)
+                if not (window[2] < v < speed_max + EPS):
+                    continue
+            for term in range(n_terms):  # with b == 1, a + d * 1 is a + d exactly, as the server computes it
+                c = term_column[term]
+                if c >= 0:
+                    out[row, type_id, c] = term_a[term] + delta[term_step[term]] * term_b[term]
+            break
+
+
+@njit(cache=True, error_model="numpy")
+def _draw_sets(recipe: TypeRecipe, rng, buffer: np.ndarray, out: np.ndarray, first: int) -> tuple[int, int]:
+    """Draw sets ``first``.. of ``out`` from ``buffer`` until it runs short; returns (sets done, values they used)."""
+    position = np.zeros(1, dtype=np.int64)
+    used = 0
+    for row in range(first, out.shape[0]):
+        draw_type_set(recipe, rng, buffer, position, out, row)
+        if position[0] > buffer.shape[0]:
+            return row, used
+        used = position[0]
+    return out.shape[0], used
+
+
+_NO_GENERATOR = np.random.default_rng(0)  # stands for the Generator argument when the uniforms come from a buffer
+_BLOCK = 4096  # uniforms fetched from a ``uniform`` callable per call
 
 
 def draw_type_table(profile: str | ServerProfile, n_sets: int, uniform: Uniform) -> np.ndarray:
     """Draw ``n_sets`` independent type tables: ``(n_sets, player_types, len(TYPE_FIELDS))`` float64.
 
-    Row 0 of each set is the default type; types 1.. are drawn one after the other, each trial for all the sets
-    still without that type at once.  ``uniform(lo, hi, n)`` returns ``n`` uniform values in [lo, hi), e.g.
-    ``lambda lo, hi, n: rng.uniform(lo, hi, n)`` for a numpy Generator ``rng``; it is called with (0, 1) and the
-    values are scaled here as the server does, ``lo + (hi - lo) * u``.  With ``n_sets == 1`` and a
-    :class:`ServerRandom` this is the server's stream, value for value; with more sets their values interleave
-    in the stream (each set still follows the server's distribution).
+    Each set is drawn by :func:`draw_type_set`, one after the other, from the values of ``uniform(lo, hi, n)``
+    (``n`` uniform values in [lo, hi), e.g. ``lambda lo, hi, n: rng.uniform(lo, hi, n)`` for a numpy Generator
+    ``rng``), fetched in blocks with (0, 1). Values fetched beyond the last set's needs are given back if
+    ``uniform`` has an ``unread(n)`` method (as :class:`ServerRandom` has), else dropped. With a
+    :class:`ServerRandom` this is the server's stream, value for value.
     """
     prof = make_profile(profile)
-    n_sets = int(n_sets)
-    if n_sets < 0:
-        raise ValueError(f"n_sets must be >= 0, got {n_sets}")
-    recipe = _recipe(prof)
-    table = np.empty((n_sets, prof.player.player_types, len(TYPE_FIELDS)))
-    table[:] = default_player_type(prof)  # and so stays every type whose 1000 trials all failed
-    for type_id in range(1, prof.player.player_types):
-        pending = np.ones(n_sets, dtype=bool)
-        for _ in range(MAX_TRIALS):
-            sets = np.flatnonzero(pending)
-            if not sets.size:
-                break
-            accepted, types = _trial(recipe, sets, uniform)
-            table[accepted, type_id] = types.T
-            pending[accepted] = False
+    if isinstance(n_sets, bool) or not isinstance(n_sets, (int, np.integer)) or n_sets < 0:
+        raise ValueError(f"n_sets must be an integer >= 0, got {n_sets!r}")
+    recipe = type_recipe(prof)
+    table = np.empty((int(n_sets), prof.player.player_types, len(TYPE_FIELDS)))
+    buffer = np.empty(0)
+    done = 0
+    while done < len(table):
+        fetched = np.asarray(uniform(0.0, 1.0, _BLOCK), dtype=np.float64)
+        if fetched.shape != (_BLOCK,) or not ((fetched >= 0.0) & (fetched < 1.0)).all():
+            raise ValueError(f"uniform(0, 1, {_BLOCK}) must return {_BLOCK} values in [0, 1)")
+        buffer = np.concatenate((buffer, fetched))
+        done, used = _draw_sets(recipe, _NO_GENERATOR, buffer, table, done)
+        buffer = buffer[used:]
+    if len(buffer) and hasattr(uniform, "unread"):
+        uniform.unread(len(buffer))
     return table
 
 
