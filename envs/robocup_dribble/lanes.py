@@ -6,11 +6,13 @@ heterogeneous player types: every ``episodes_per_type_set`` episodes it draws a 
 rules (:func:`robocup_dribble.player_types.draw_type_set`), and each episode of the set uses a different type of it
 (in random order).
 
-Random draws (one numpy Generator, in this order, lane after lane): a step draws ``N_UNIFORMS`` uniforms per lane
-for the physics; a lane that starts an episode then draws, if its set is used up, a new type set and
-``player_types`` uniforms that order it, and then the six uniforms of its start state
-(:func:`robocup_dribble.task.start_lane`). This is stream version 2; version 1 (before the resets moved into the
-compiled loop) drew all lanes' physics uniforms first and the type sets from a pre-drawn pool.
+Random draws come from one numpy Generator, through a buffer of its ``random()`` values (so the order is that of
+single draws; values drawn ahead stay in the buffer for the next call and are dropped by :meth:`DribbleLanes.reseed`).
+A step takes ``N_UNIFORMS`` values per lane for the physics (lane after lane); then each lane whose episode ended
+starts the next one (in lane order), taking, if its type set is used up, a new set (:func:`draw_type_set`) and
+``player_types`` values that order it, and then the six values of its start state
+(:func:`robocup_dribble.task.start_lane`). This is random stream version 2; version 1 (before the episode starts
+moved into the compiled loop) drew the type sets from a separately drawn pool.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from numba import njit
 
 from robocup_dribble import physics, skills, task
 from robocup_dribble.params import ServerProfile
-from robocup_dribble.player_types import PlayerType, TypeRecipe, draw_type_set, type_recipe
+from robocup_dribble.player_types import PlayerType, TypeRecipe, draw_type_set, next_uniform, type_recipe
 from robocup_dribble.task import DribbleTask
 
 RANDOM_STREAM_VERSION = 2
@@ -107,6 +109,8 @@ class DribbleLanes:
             distance=np.zeros(n),
             returns=np.zeros(n),
         )
+        self._uniforms = np.empty(0)  # values drawn from rng and not used yet
+        self._position = np.zeros(1, dtype=np.int64)  # the next one to use
 
     def __getattr__(self, name: str) -> np.ndarray:
         """The per-lane arrays by name (``lanes.state``, ``lanes.type_ids``, ...)."""
@@ -118,6 +122,8 @@ class DribbleLanes:
         """Draw everything from ``rng`` from now on and start new type sets in every lane."""
         self.rng = rng
         self.arrays.episodes_in_set[:] = 0
+        self._uniforms = np.empty(0)
+        self._position[0] = 0
 
     def reset(self, lanes: np.ndarray) -> np.ndarray:
         """Start new episodes in ``lanes`` (distinct indices in 0..N-1); returns their observations ``(len(lanes), 10)``.
@@ -133,7 +139,7 @@ class DribbleLanes:
         if len(np.unique(index)) != len(index):
             raise ValueError(f"lanes must be distinct, got {index!r:.200}")
         obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
-        _start_lanes(self.arrays, self._settings, index, self.rng, obs)
+        self._start(index, obs, by_row=True)
         return obs
 
     def step(self, action_types: np.ndarray, params: np.ndarray, autoreset: bool = True) -> LaneStep:
@@ -156,8 +162,36 @@ class DribbleLanes:
             episode_returns=np.zeros(n),
             episode_lengths=np.zeros(n, dtype=np.int64),
         )
-        _step_lanes(self.arrays, self._settings, kinds, params, self.rng, autoreset, out)
+        physics_uniforms = self._take(n * physics.N_UNIFORMS).reshape(n, physics.N_UNIFORMS)
+        a, g = self.arrays, self._settings
+        ended = _step_lanes(
+            a.state, a.types, a.steps, a.start_x, a.distance, a.returns, g.k, g.c, g.param_low, g.param_high, g.obs_low,
+            g.obs_high, kinds, params, physics_uniforms, out.observations, out.rewards, out.terminated, out.truncated,
+            out.distances, out.episode_returns, out.episode_lengths,
+        )  # separate arrays: numba unpacks them faster than NamedTuples
+        if autoreset and len(ended):
+            out.terminal_observations[ended] = out.observations[ended]
+            self._start(ended, out.observations, by_row=False)
         return out
+
+    def _take(self, count: int) -> np.ndarray:
+        """The next ``count`` uniforms of the buffer (drawing more from ``rng`` first if it holds fewer)."""
+        start = int(self._position[0])
+        if len(self._uniforms) - start < count:
+            fresh = self.rng.random(max(count, _DRAW_BLOCK))
+            self._uniforms, start = np.concatenate((self._uniforms[start:], fresh)), 0
+        self._position[0] = start + count
+        return self._uniforms[start : start + count]
+
+    def _start(self, lanes: np.ndarray, obs: np.ndarray, by_row: bool) -> None:
+        """Start the next episode of ``lanes`` (in order); observations to ``obs[row]`` (``by_row``) or ``obs[lane]``."""
+        first = 0
+        while first < len(lanes):
+            first = _start_lanes(self.arrays, self._settings, lanes, first, self._uniforms, self._position, obs, by_row)
+            if first < len(lanes):  # ran short at lanes[first]: draw more and start it again
+                start = int(self._position[0])
+                self._uniforms = np.concatenate((self._uniforms[start:], self.rng.random(_DRAW_BLOCK)))
+                self._position[0] = 0
 
     def player_type(self, lane: int) -> PlayerType:
         """The player type of a lane's current episode."""
@@ -208,50 +242,62 @@ def _first_invalid(kinds: np.ndarray, params: np.ndarray) -> int:
 # update, which per lane and field would cost more than the physics.
 
 
+_DRAW_BLOCK = 4096  # uniforms drawn from the Generator at least per refill of the buffer
+
+
 @njit(cache=True, error_model="numpy")
-def _start_lane(a: LaneArrays, k, c, recipe, i: int, rng, order_keys, no_buffer, position) -> None:
+def _start_lane(a: LaneArrays, k, c, recipe, i: int, uniforms, position, order_keys) -> bool:
     """Start lane ``i``'s next episode: its next player type (a fresh set when the set is used up), its start state
-    and its episode statistics. ``order_keys`` (``player_types`` floats), ``no_buffer`` (empty) and ``position`` (one
-    int) are scratch, so that :func:`draw_type_set` draws from the Generator."""
+    and its episode statistics. Returns False, committing nothing, if ``uniforms`` ran short (the caller draws more
+    and calls again from the same position); ``order_keys`` is scratch of ``player_types`` floats."""
     state, types, type_sets, set_order, episodes_in_set, type_ids, steps, start_x, distance, returns = a
     n_types = type_sets.shape[1]
     episode = episodes_in_set[i] % int(c[task.R_EPISODES_PER_TYPE_SET])
     if episode == 0:
-        draw_type_set(recipe, rng, no_buffer, position, type_sets, i)
+        draw_type_set(recipe, uniforms, position, type_sets, i)
         for j in range(n_types):
-            order_keys[j] = rng.random()
+            order_keys[j] = next_uniform(uniforms, position)
         set_order[i, :] = np.argsort(order_keys)
     type_id = set_order[i, episode % n_types]  # distinct while episodes_per_type_set <= player_types
-    type_ids[i] = type_id
     for f in range(types.shape[1]):
         types[i, f] = type_sets[i, type_id, f]
+    task.start_lane(state, i, types, i, uniforms, position, c, k)
+    if position[0] > uniforms.shape[0]:
+        return False
+    type_ids[i] = type_id
     episodes_in_set[i] += 1
-    task.start_lane(state, i, types, i, rng, c, k)
     steps[i] = 0
     start_x[i] = state[i, physics.P_X]
     distance[i] = 0.0
     returns[i] = 0.0
+    return True
 
 
 @njit(cache=True, error_model="numpy")
-def _start_lanes(a: LaneArrays, g: LaneSettings, lanes: np.ndarray, rng, obs: np.ndarray) -> None:
+def _start_lanes(a: LaneArrays, g: LaneSettings, lanes, first: int, uniforms, position, obs, by_row: bool) -> int:
+    """Start ``lanes[first:]`` in order and write their observations; returns the index in ``lanes`` at which the
+    uniforms ran short (that lane is not started), or ``len(lanes)``."""
     k, c, _, _, obs_low, obs_high, recipe = g
     state, types = a.state, a.types
-    order_keys, no_buffer, position = np.empty(a.type_sets.shape[1]), np.empty(0), np.zeros(1, dtype=np.int64)
-    for row in range(lanes.shape[0]):
+    order_keys = np.empty(a.type_sets.shape[1])
+    for row in range(first, lanes.shape[0]):
         i = lanes[row]
-        _start_lane(a, k, c, recipe, i, rng, order_keys, no_buffer, position)
-        task.observe(state, i, types, i, obs_low, obs_high, obs, row)
+        start = position[0]
+        if not _start_lane(a, k, c, recipe, i, uniforms, position, order_keys):
+            position[0] = start
+            return row
+        task.observe(state, i, types, i, obs_low, obs_high, obs, row if by_row else i)
+    return lanes.shape[0]
 
 
 @njit(cache=True, error_model="numpy")
-def _step_lanes(a: LaneArrays, g: LaneSettings, kinds, params, rng, autoreset: bool, out: LaneStep) -> None:
-    """skills -> physics -> task for every lane, then the next episode's start where one ended (if ``autoreset``)."""
-    state, types, _, _, _, _, steps, start_x, distance, returns = a
-    k, c, param_low, param_high, obs_low, obs_high, recipe = g
-    obs, rewards, terminated, truncated, distances, terminal_obs, episode_returns, episode_lengths = out
-    uniforms = np.empty((1, physics.N_UNIFORMS))
-    order_keys, no_buffer, position = np.empty(a.type_sets.shape[1]), np.empty(0), np.zeros(1, dtype=np.int64)
+def _step_lanes(state, types, steps, start_x, distance, returns, k, c, param_low, param_high, obs_low, obs_high,
+                kinds, params, uniforms, obs, rewards, terminated, truncated, distances, episode_returns,
+                episode_lengths) -> np.ndarray:
+    """skills -> physics -> task for every lane (lane ``i`` uses ``uniforms[i]``); writes the :class:`LaneStep`
+    fields it names and returns the lanes whose episode ended, in order."""
+    ended = np.empty(state.shape[0], dtype=np.int64)
+    n_ended = 0
     max_actions = c[task.R_MAX_ACTIONS]
     for i in range(state.shape[0]):
         kind = kinds[i]
@@ -261,10 +307,8 @@ def _step_lanes(a: LaneArrays, g: LaneSettings, kinds, params, rng, autoreset: b
         if skills.PARAM_WIDTHS[kind] > 1:
             p1 = min(max(params[i, first + 1], param_low[first + 1]), param_high[first + 1])
         c_kind, power, direction = skills.command(state, i, types, i, kind, p0, p1, k)
-        for j in range(physics.N_UNIFORMS):
-            uniforms[0, j] = rng.random()
         previous_x = state[i, physics.P_X]
-        collided, _ = physics.cycle(state, i, types, i, c_kind, power, direction, uniforms, 0, k)
+        collided, _ = physics.cycle(state, i, types, i, c_kind, power, direction, uniforms, i, k)
         reward, lost = task.evaluate(state, i, types, i, collided, previous_x, c, k)
         if not lost:
             distance[i] = state[i, physics.P_X] - start_x[i]
@@ -275,8 +319,6 @@ def _step_lanes(a: LaneArrays, g: LaneSettings, kinds, params, rng, autoreset: b
         task.observe(state, i, types, i, obs_low, obs_high, obs, i)
         if lost or ended_by_limit:
             episode_returns[i], episode_lengths[i] = returns[i], steps[i]
-            if autoreset:
-                for j in range(obs.shape[1]):
-                    terminal_obs[i, j] = obs[i, j]
-                _start_lane(a, k, c, recipe, i, rng, order_keys, no_buffer, position)
-                task.observe(state, i, types, i, obs_low, obs_high, obs, i)
+            ended[n_ended] = i
+            n_ended += 1
+    return ended[:n_ended]

@@ -214,22 +214,20 @@ def type_recipe(profile: ServerProfile) -> TypeRecipe:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _next_uniform(rng, buffer: np.ndarray, position: np.ndarray) -> float:
-    """The next U[0, 1) value: from ``buffer`` at ``position[0]`` if the buffer is not empty (0.5 once it is used up,
-    with ``position[0]`` counting on so the caller sees it ran short), else from the numpy Generator ``rng``."""
-    if buffer.shape[0] == 0:
-        return rng.random()
+def next_uniform(buffer: np.ndarray, position: np.ndarray) -> float:
+    """The value of ``buffer`` at ``position[0]``, which moves on by one; 0.5 once the buffer is used up (the position
+    still moves on, so the caller sees from ``position[0] > buffer.shape[0]`` that it ran short and must redo)."""
     p = position[0]
     position[0] = p + 1
     return buffer[p] if p < buffer.shape[0] else 0.5
 
 
 @njit(cache=True, error_model="numpy")
-def draw_type_set(recipe: TypeRecipe, rng, buffer: np.ndarray, position: np.ndarray, out: np.ndarray, row: int) -> None:
+def draw_type_set(recipe: TypeRecipe, buffer: np.ndarray, position: np.ndarray, out: np.ndarray, row: int) -> None:
     """Draw one set of player types into ``out[row]`` (``(player_types, F)``), the server's way (spec §7.2).
 
     Type 0 is the default type; types 1.. are drawn one after the other, each by up to ``MAX_TRIALS`` trials (a type
-    whose trials all fail stays the default type). The uniforms come from :func:`_next_uniform` in the server's
+    whose trials all fail stays the default type). The uniforms come from :func:`next_uniform` in the server's
     order, so with ``buffer`` holding :class:`ServerRandom`'s stream this is the server's set, value for value.
     """
     default, step_lo, step_span, term_step, term_column, term_a, term_b, term_rule, window = recipe  # unpacked once:
@@ -247,7 +245,7 @@ def draw_type_set(recipe: TypeRecipe, rng, buffer: np.ndarray, position: np.ndar
             for step in range(n_steps):
                 d = step_lo[step]
                 if step_span[step] != 0.0:
-                    d = step_lo[step] + step_span[step] * _next_uniform(rng, buffer, position)
+                    d = step_lo[step] + step_span[step] * next_uniform(buffer, position)
                 delta[step] = d
                 while term < n_terms and term_step[term] == step:
                     value = term_a[term] + d * term_b[term]
@@ -283,19 +281,18 @@ def draw_type_set(recipe: TypeRecipe, rng, buffer: np.ndarray, position: np.ndar
 
 
 @njit(cache=True, error_model="numpy")
-def _draw_sets(recipe: TypeRecipe, rng, buffer: np.ndarray, out: np.ndarray, first: int) -> tuple[int, int]:
+def _draw_sets(recipe: TypeRecipe, buffer: np.ndarray, out: np.ndarray, first: int) -> tuple[int, int]:
     """Draw sets ``first``.. of ``out`` from ``buffer`` until it runs short; returns (sets done, values they used)."""
     position = np.zeros(1, dtype=np.int64)
     used = 0
     for row in range(first, out.shape[0]):
-        draw_type_set(recipe, rng, buffer, position, out, row)
+        draw_type_set(recipe, buffer, position, out, row)
         if position[0] > buffer.shape[0]:
             return row, used
         used = position[0]
     return out.shape[0], used
 
 
-_NO_GENERATOR = np.random.default_rng(0)  # stands for the Generator argument when the uniforms come from a buffer
 _BLOCK = 4096  # uniforms fetched from a ``uniform`` callable per call
 
 
@@ -320,7 +317,7 @@ def draw_type_table(profile: str | ServerProfile, n_sets: int, uniform: Uniform)
         if fetched.shape != (_BLOCK,) or not ((fetched >= 0.0) & (fetched < 1.0)).all():
             raise ValueError(f"uniform(0, 1, {_BLOCK}) must return {_BLOCK} values in [0, 1)")
         buffer = np.concatenate((buffer, fetched))
-        done, used = _draw_sets(recipe, _NO_GENERATOR, buffer, table, done)
+        done, used = _draw_sets(recipe, buffer, table, done)
         buffer = buffer[used:]
     if len(buffer) and hasattr(uniform, "unread"):
         uniform.unread(len(buffer))

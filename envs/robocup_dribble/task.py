@@ -29,6 +29,7 @@ from numba import njit
 
 from robocup_dribble import physics
 from robocup_dribble.params import ServerProfile
+from robocup_dribble.player_types import next_uniform
 
 OBSERVATION_NAMES = (
     "player_decay", "dash_power_rate", "kickable_margin", "kick_rand",
@@ -150,10 +151,11 @@ def _polar(radius: float, unit_angle: float) -> tuple[float, float]:
 
 
 @njit(cache=True, error_model="numpy")
-def start_lane(state, i, types, ti, rng, c, k) -> None:
+def start_lane(state, i, types, ti, uniforms, position, c, k) -> None:
     """Place player and ball of lane ``i`` (type row ``ti``) at the start of an episode and recover the player.
 
-    Draws six uniforms from ``rng`` in this order: the ball's radius (uniform over the ring's area), the player's speed
+    Takes six uniforms from ``uniforms`` at ``position`` (:func:`robocup_dribble.player_types.next_uniform`) in this
+    order: the ball's radius (uniform over the ring's area), the player's speed
     and direction, the ball's extra speed and its direction, the ball's position angle.
 
     :param c: :meth:`DribbleTask.constants`. :param k: :func:`robocup_dribble.physics.profile_constants`.
@@ -164,14 +166,14 @@ def start_lane(state, i, types, ti, rng, c, k) -> None:
     clearance = c[R_START_CLEARANCE]
     inner = touching + clearance
     outer = max(inner, touching + types[ti, physics.T_KICKABLE_MARGIN] - clearance)
-    radius = math.sqrt(inner**2 + (outer**2 - inner**2) * rng.random())
-    player_speed = c[R_START_PLAYER_SPEED] * rng.random()
-    pvx, pvy = _polar(player_speed, rng.random())
-    ball_speed = c[R_START_BALL_SPEED] * rng.random()
-    dvx, dvy = _polar(ball_speed, rng.random())
+    radius = math.sqrt(inner**2 + (outer**2 - inner**2) * next_uniform(uniforms, position))
+    player_speed = c[R_START_PLAYER_SPEED] * next_uniform(uniforms, position)
+    pvx, pvy = _polar(player_speed, next_uniform(uniforms, position))
+    ball_speed = c[R_START_BALL_SPEED] * next_uniform(uniforms, position)
+    dvx, dvy = _polar(ball_speed, next_uniform(uniforms, position))
     state[i, physics.P_VX], state[i, physics.P_VY] = pvx, pvy
     state[i, physics.B_VX], state[i, physics.B_VY] = pvx + dvx, pvy + dvy
-    state[i, physics.B_X], state[i, physics.B_Y] = _polar(radius, rng.random())
+    state[i, physics.B_X], state[i, physics.B_Y] = _polar(radius, next_uniform(uniforms, position))
     physics.recover_lane(state, i, types, ti, k)
 
 
