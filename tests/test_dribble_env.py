@@ -200,11 +200,11 @@ def test_a_new_type_set_every_seven_episodes_with_distinct_types():
     seen = []
     for _ in range(21):
         seen.append(env._lanes.type_ids[0])
-        set_table = env._lanes.type_sets[0].copy()
+        set_table = env._lanes.set_types[0].copy()
         env.step(action(0))
         env.reset()
         if len(seen) % 7 == 0:
-            assert not np.array_equal(env._lanes.type_sets[0], set_table), "a new set after 7 episodes"
+            assert not np.array_equal(env._lanes.set_types[0], set_table), "a new set after 7 episodes"
     for block in range(3):
         assert len(set(seen[7 * block : 7 * block + 7])) == 7
 

@@ -37,8 +37,9 @@ class LaneArrays(NamedTuple):
 
     state: np.ndarray  # (N, STATE_SIZE) physics state
     types: np.ndarray  # (N, TYPE_SIZE) the player type of the current episode
-    type_sets: np.ndarray  # (N, player_types, TYPE_SIZE) the lane's current set of types
-    set_order: np.ndarray  # (N, player_types) int64: the set's types in the order its episodes use them (cyclically)
+    set_types: np.ndarray  # (N, M, TYPE_SIZE) the types of the lane's set its episodes use, in order (cyclically);
+    # M = min(episodes_per_type_set, player_types): only these are kept, which keeps the lanes' memory small
+    set_ids: np.ndarray  # (N, M) int64: their type ids in the set
     episodes_in_set: np.ndarray  # (N,) int64: episodes started since the lane's first set
     type_ids: np.ndarray  # (N,) int64: the current episode's type id in its set
     steps: np.ndarray  # (N,) int64: actions taken in the current episode
@@ -96,12 +97,12 @@ class DribbleLanes:
             self.observation_space.low.astype(np.float64), self.observation_space.high.astype(np.float64),
             type_recipe(profile),
         )  # fmt: skip
-        n_types = profile.player.player_types
+        used_types = min(profile.player.player_types, task_settings.episodes_per_type_set)
         self.arrays = LaneArrays(
             state=physics.new_state(n),
             types=np.zeros((n, physics.TYPE_SIZE)),
-            type_sets=np.zeros((n, n_types, physics.TYPE_SIZE)),
-            set_order=np.zeros((n, n_types), dtype=np.int64),
+            set_types=np.zeros((n, used_types, physics.TYPE_SIZE)),
+            set_ids=np.zeros((n, used_types), dtype=np.int64),
             episodes_in_set=np.zeros(n, dtype=np.int64),
             type_ids=np.zeros(n, dtype=np.int64),
             steps=np.zeros(n, dtype=np.int64),
@@ -187,7 +188,8 @@ class DribbleLanes:
         """Start the next episode of ``lanes`` (in order); observations to ``obs[row]`` (``by_row``) or ``obs[lane]``."""
         first = 0
         while first < len(lanes):
-            first = _start_lanes(self.arrays, self._settings, lanes, first, self._uniforms, self._position, obs, by_row)
+            first = _start_lanes(self.arrays, self._settings, self.profile.player.player_types, lanes, first, self._uniforms,
+                                 self._position, obs, by_row)
             if first < len(lanes):  # ran short at lanes[first]: draw more and start it again
                 start = int(self._position[0])
                 self._uniforms = np.concatenate((self._uniforms[start:], self.rng.random(_DRAW_BLOCK)))
@@ -246,25 +248,30 @@ _DRAW_BLOCK = 4096  # uniforms drawn from the Generator at least per refill of t
 
 
 @njit(cache=True, error_model="numpy")
-def _start_lane(a: LaneArrays, k, c, recipe, i: int, uniforms, position, order_keys) -> bool:
+def _start_lane(a: LaneArrays, k, c, recipe, i: int, uniforms, position, type_set, order_keys) -> bool:
     """Start lane ``i``'s next episode: its next player type (a fresh set when the set is used up), its start state
     and its episode statistics. Returns False, committing nothing, if ``uniforms`` ran short (the caller draws more
-    and calls again from the same position); ``order_keys`` is scratch of ``player_types`` floats."""
-    state, types, type_sets, set_order, episodes_in_set, type_ids, steps, start_x, distance, returns = a
-    n_types = type_sets.shape[1]
+    and calls again from the same position). ``type_set`` ``(1, player_types, TYPE_SIZE)`` and ``order_keys``
+    ``(player_types,)`` are scratch."""
+    state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns = a
+    used_types = set_types.shape[1]
     episode = episodes_in_set[i] % int(c[task.R_EPISODES_PER_TYPE_SET])
-    if episode == 0:
-        draw_type_set(recipe, uniforms, position, type_sets, i)
-        for j in range(n_types):
+    if episode == 0:  # a new set, its types in random order; the lane keeps those its episodes use
+        draw_type_set(recipe, uniforms, position, type_set, 0)
+        for j in range(order_keys.shape[0]):
             order_keys[j] = next_uniform(uniforms, position)
-        set_order[i, :] = np.argsort(order_keys)
-    type_id = set_order[i, episode % n_types]  # distinct while episodes_per_type_set <= player_types
+        order = np.argsort(order_keys)
+        for e in range(used_types):
+            set_ids[i, e] = order[e]
+            for f in range(types.shape[1]):
+                set_types[i, e, f] = type_set[0, order[e], f]
+    e = episode % used_types  # distinct types while episodes_per_type_set <= player_types
     for f in range(types.shape[1]):
-        types[i, f] = type_sets[i, type_id, f]
+        types[i, f] = set_types[i, e, f]
     task.start_lane(state, i, types, i, uniforms, position, c, k)
     if position[0] > uniforms.shape[0]:
         return False
-    type_ids[i] = type_id
+    type_ids[i] = set_ids[i, e]
     episodes_in_set[i] += 1
     steps[i] = 0
     start_x[i] = state[i, physics.P_X]
@@ -274,16 +281,17 @@ def _start_lane(a: LaneArrays, k, c, recipe, i: int, uniforms, position, order_k
 
 
 @njit(cache=True, error_model="numpy")
-def _start_lanes(a: LaneArrays, g: LaneSettings, lanes, first: int, uniforms, position, obs, by_row: bool) -> int:
+def _start_lanes(a: LaneArrays, g: LaneSettings, player_types: int, lanes, first: int, uniforms, position, obs,
+                 by_row: bool) -> int:
     """Start ``lanes[first:]`` in order and write their observations; returns the index in ``lanes`` at which the
     uniforms ran short (that lane is not started), or ``len(lanes)``."""
     k, c, _, _, obs_low, obs_high, recipe = g
     state, types = a.state, a.types
-    order_keys = np.empty(a.type_sets.shape[1])
+    type_set, order_keys = np.empty((1, player_types, a.types.shape[1])), np.empty(player_types)
     for row in range(first, lanes.shape[0]):
         i = lanes[row]
         start = position[0]
-        if not _start_lane(a, k, c, recipe, i, uniforms, position, order_keys):
+        if not _start_lane(a, k, c, recipe, i, uniforms, position, type_set, order_keys):
             position[0] = start
             return row
         task.observe(state, i, types, i, obs_low, obs_high, obs, row if by_row else i)

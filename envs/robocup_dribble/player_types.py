@@ -176,25 +176,29 @@ def _steps(profile: ServerProfile) -> list:
 class TypeRecipe(NamedTuple):
     """Spec §7.2 as arrays for the compiled generator (:func:`type_recipe`; numba takes arrays, not lists).
 
-    Step ``i`` draws ``delta = step_lo[i] + step_span[i] * u`` (no draw when ``step_span[i] == 0``); term ``j`` of
-    step ``term_step[j]`` computes ``term_a[j] + delta * term_b[j]``, rejects the trial unless it is ``> 0``
-    (``term_rule[j] == 1``) or ``>= 0`` (``2``) and sets column ``term_column[j]`` (-1: none) of the type. With
-    ``window[0]`` = 1 a type is kept only if its terminal speed lies in (``window[2]``, speed max + EPS) for
-    ``max_power = window[1]`` (step 9).
+    Step ``i`` draws ``delta[i] = step_lo[i] + step_span[i] * u`` (no draw when ``step_span[i] == 0``), then checks
+    ``check_a[j] + delta[i] * check_b[j]`` for ``j`` in ``check_start[i] .. check_start[i + 1]``: the trial is rejected
+    unless it is ``> 0`` (``check_strict[j]``) or ``>= 0``. Column ``f`` of an accepted type is
+    ``column_a[f] + delta[column_step[f]] * column_b[f]``. With ``window[0]`` = 1 a type is kept only if its terminal
+    speed lies in (``window[2]``, speed max + EPS) for ``max_power = window[1]`` (step 9).
     """
 
     default: np.ndarray  # (F,) type 0
-    step_lo: np.ndarray
+    step_lo: np.ndarray  # (S,)
     step_span: np.ndarray
-    term_step: np.ndarray
-    term_column: np.ndarray
-    term_a: np.ndarray
-    term_b: np.ndarray
-    term_rule: np.ndarray
-    window: np.ndarray
+    check_start: np.ndarray  # (S + 1,) int64
+    check_a: np.ndarray
+    check_b: np.ndarray
+    check_strict: np.ndarray  # bool
+    column_step: np.ndarray  # (F,) int64
+    column_a: np.ndarray
+    column_b: np.ndarray
+    window: np.ndarray  # (3,)
 
 
-_RULES = {"": 0, ">0": 1, ">=0": 2}
+def _passes(value: float, strict: bool) -> bool:
+    """The rejection rule of spec §7.2: a value must be > 0 (strict) or >= 0."""
+    return value > 0.0 if strict else value >= 0.0
 
 
 @functools.lru_cache(maxsize=16)
@@ -203,14 +207,26 @@ def type_recipe(profile: ServerProfile) -> TypeRecipe:
     steps = _steps(profile)
     lo = np.array([min(bounds) for bounds, _ in steps])  # the server swaps reversed bounds
     span = np.array([max(bounds) for bounds, _ in steps]) - lo
-    terms = [(i, -1 if column is None else TYPE_FIELDS.index(column), a, b, _RULES[rule])
-             for i, (_, step_terms) in enumerate(steps) for column, a, b, rule in step_terms]
-    step_of, column, a, b, rule = (np.array(values) for values in zip(*terms))
+    checks, check_start, columns = [], [0], {}
+    for i, (_, terms) in enumerate(steps):
+        for column, a, b, rule in terms:
+            if column:
+                columns[column] = (i, a, b)
+            # a + d * b is monotone in d, and d lies in [lo, lo + span]: a check that passes at both ends never
+            # rejects, and is left out
+            if rule and not all(_passes(a + d * b, rule == ">0") for d in (lo[i], lo[i] + span[i])):
+                checks.append((a, b, rule == ">0"))
+        check_start.append(len(checks))
+    check_a, check_b, strict = (np.array(values) for values in zip(*checks)) if checks else (np.empty(0),) * 3
+    column_step, column_a, column_b = (np.array(values) for values in zip(*(columns[name] for name in TYPE_FIELDS)))
     s = profile.server
     window = np.array([float(profile.hetero_acceptance == "speed_window"), s.max_power, s.player_speed_max_min - EPS])
     default = np.array(default_player_type(profile), dtype=np.float64)
-    return TypeRecipe(default, lo, span, step_of.astype(np.int64), column.astype(np.int64), a.astype(np.float64),
-                      b.astype(np.float64), rule.astype(np.int64), window)
+    return TypeRecipe(
+        default, lo, span, np.array(check_start, dtype=np.int64), check_a.astype(np.float64), check_b.astype(np.float64),
+        strict.astype(np.bool_), column_step.astype(np.int64), column_a.astype(np.float64), column_b.astype(np.float64),
+        window,
+    )
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -230,54 +246,45 @@ def draw_type_set(recipe: TypeRecipe, buffer: np.ndarray, position: np.ndarray, 
     whose trials all fail stays the default type). The uniforms come from :func:`next_uniform` in the server's
     order, so with ``buffer`` holding :class:`ServerRandom`'s stream this is the server's set, value for value.
     """
-    default, step_lo, step_span, term_step, term_column, term_a, term_b, term_rule, window = recipe  # unpacked once:
-    # reading an array out of the tuple in the loops would update its reference count every time
-    n_types, n_fields = out.shape[1], out.shape[2]
-    n_steps, n_terms = step_lo.shape[0], term_step.shape[0]
+    # unpacked once: reading an array out of the tuple inside the loops would update its reference count every time
+    default, lo, span, check_start, check_a, check_b, check_strict, column_step, column_a, column_b, window = recipe
+    n_types, n_fields, n_steps = out.shape[1], out.shape[2], lo.shape[0]
     delta = np.empty(n_steps)
-    for type_id in range(n_types):
-        for f in range(n_fields):
-            out[row, type_id, f] = default[f]
+    for f in range(n_fields):
+        out[row, 0, f] = default[f]
     for type_id in range(1, n_types):
+        accepted = False
         for _ in range(MAX_TRIALS):
             ok = True
-            term = 0
             for step in range(n_steps):
-                d = step_lo[step]
-                if step_span[step] != 0.0:
-                    d = step_lo[step] + step_span[step] * next_uniform(buffer, position)
+                d = lo[step]
+                if span[step] != 0.0:
+                    d = lo[step] + span[step] * next_uniform(buffer, position)
                 delta[step] = d
-                while term < n_terms and term_step[term] == step:
-                    value = term_a[term] + d * term_b[term]
-                    rule = term_rule[term]
-                    if (rule == 1 and not value > 0.0) or (rule == 2 and not value >= 0.0):
+                for j in range(check_start[step], check_start[step + 1]):
+                    value = check_a[j] + d * check_b[j]
+                    if not (value > 0.0 if check_strict[j] else value >= 0.0):
                         ok = False
-                    term += 1
+                        break
                 if not ok:
                     break
             if not ok:
                 continue
             if window[0] > 0.5:  # step 9: the terminal speed must lie in the acceptance window
-                dash_power_rate = effort_max = decay = speed_max = 0.0
-                for term in range(n_terms):
-                    c = term_column[term]
-                    value = term_a[term] + delta[term_step[term]] * term_b[term]
-                    if c == _DASH_POWER_RATE:
-                        dash_power_rate = value
-                    elif c == _EFFORT_MAX:
-                        effort_max = value
-                    elif c == _DECAY:
-                        decay = value
-                    elif c == _SPEED_MAX:
-                        speed_max = value
+                dash_power_rate = column_a[_DASH_POWER_RATE] + delta[column_step[_DASH_POWER_RATE]] * column_b[_DASH_POWER_RATE]
+                effort_max = column_a[_EFFORT_MAX] + delta[column_step[_EFFORT_MAX]] * column_b[_EFFORT_MAX]
+                decay = column_a[_DECAY] + delta[column_step[_DECAY]] * column_b[_DECAY]
+                speed_max = column_a[_SPEED_MAX] + delta[column_step[_SPEED_MAX]] * column_b[_SPEED_MAX]
                 v = (window[1] * dash_power_rate * effort_max) / (1.0 - decay)
                 if not (window[2] < v < speed_max + EPS):
                     continue
-            for term in range(n_terms):  # with b == 1, a + d * 1 is a + d exactly, as the server computes it
-                c = term_column[term]
-                if c >= 0:
-                    out[row, type_id, c] = term_a[term] + delta[term_step[term]] * term_b[term]
+            for f in range(n_fields):  # with b == 1, a + d * 1 is a + d exactly, as the server computes it
+                out[row, type_id, f] = column_a[f] + delta[column_step[f]] * column_b[f]
+            accepted = True
             break
+        if not accepted:
+            for f in range(n_fields):
+                out[row, type_id, f] = default[f]
 
 
 @njit(cache=True, error_model="numpy")
