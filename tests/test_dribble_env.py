@@ -375,6 +375,11 @@ def test_batched_action_types_must_be_integers():
     with pytest.raises(ValueError, match="real numbers"):
         vec.step_arrays(np.zeros(2, dtype=int), np.zeros((2, 7), dtype=complex))
     vec.step_arrays(np.array([0.0, 1.0]), np.zeros((2, 7)))  # integral floats are integers
+    for bad in (True, None, 1.5, "1", 1 + 0j, 9):
+        with pytest.raises(ValueError, match="action type"):
+            vec.step([action(0), (bad, action(0)[1])])
+    with pytest.raises(ValueError, match="sizes"):
+        vec.step([action(0), (0, (np.zeros(2), np.zeros(1), np.zeros(2), np.zeros(2)))])
 
 
 def test_import_needs_no_torch():

@@ -202,19 +202,18 @@ class DribbleVecEnv(VecEnv):
 def _parse_actions(actions: Sequence) -> tuple[np.ndarray, np.ndarray]:
     """N per-lane Tuple actions -> ``(N,)`` int64 action types and ``(N, 7)`` parameters.
 
-    The common case (numpy parameter vectors of the right sizes, integer types) takes one concatenation; anything
-    else goes through :func:`robocup_dribble.env.parse_action` lane by lane, which names what is wrong.
+    The common case (integer types, numpy parameter vectors of the right sizes) takes one concatenation; anything
+    else goes through :func:`robocup_dribble.env.parse_action` lane by lane, which converts what it can and names
+    what is wrong. (The action types' range is checked with the parameters, by the lanes.)
     """
     try:
-        kinds = [action[0] for action in actions]
+        kind_list = [action[0] for action in actions]
+        kinds = np.array(kind_list)
         parts = [part for action in actions for part in action[1]]
-        if [part.size for part in parts] == list(skills.PARAM_SIZES) * len(actions) and all(
-            type(kind) is int or isinstance(kind, np.integer) for kind in kinds
-        ):
-            kinds_array = np.array(kinds, dtype=np.int64)
-            if kinds_array.size == 0 or 0 <= kinds_array.min() <= kinds_array.max() < skills.N_ACTION_TYPES:
-                params = np.concatenate(parts, axis=None, dtype=np.float64).reshape(len(actions), skills.N_PARAMS)
-                return kinds_array, params
+        kind_types = set(map(type, kind_list))
+        if kinds.dtype.kind in "iu" and bool not in kind_types and np.bool_ not in kind_types and [part.size for part in parts] == list(skills.PARAM_SIZES) * len(actions):
+            params = np.concatenate(parts, axis=None, dtype=np.float64).reshape(len(actions), skills.N_PARAMS)
+            return kinds.astype(np.int64, copy=False), params
     except (TypeError, ValueError, AttributeError, IndexError, KeyError):
         pass
     parsed = [parse_action(action) for action in actions]
