@@ -30,12 +30,16 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-register(id="RoboCupDribble-v0", entry_point="robocup_dribble.env:DribbleEnv", kwargs={"profile": "v19"})
-register(id="RoboCupDribblePaper-v0", entry_point="robocup_dribble.env:DribbleEnv", kwargs={"profile": "v11"})
+ENV_PROFILES: dict[str, str] = {"RoboCupDribble-v0": "v19", "RoboCupDribblePaper-v0": "v11"}
+"""The registered env ids and their server profiles (the one table; others should read it)."""
+
+for _env_id, _profile in ENV_PROFILES.items():
+    register(id=_env_id, entry_point="robocup_dribble.env:DribbleEnv", kwargs={"profile": _profile})
 
 __all__ = [
     "ACTION_NAMES",
     "DASH_MAX",
+    "ENV_PROFILES",
     "KICK_ALIGN",
     "KICK_POSITION",
     "KICK_VELOCITY",
