@@ -57,7 +57,10 @@ EXTREME_CLEARANCE = 0.5  # share of the clearances a dash must keep under the lo
 LOST = -1e3  # score of a branch that loses the ball (plus the cycles it kept the ball)
 
 # the planner's settings, as one float vector for the compiled code
-G_HORIZON, G_MAX_RUN, G_DASH_DEPTH, G_EDGE, G_BODY, G_EFFORT_LOW, G_EFFORT_HIGH = range(7)
+PLANNER_FIELDS = ("horizon", "max_run", "dash_depth", "safety", "body_safety", "effort_low", "effort_high")
+G_HORIZON, G_MAX_RUN, G_DASH_DEPTH, G_EDGE, G_BODY, G_EFFORT_LOW, G_EFFORT_HIGH = (
+    PLANNER_FIELDS.index(name) for name in PLANNER_FIELDS
+)
 
 
 class HandCodedDribbler:
@@ -107,7 +110,9 @@ class HandCodedDribbler:
         self.dash_directions = tuple(float(d) for d in dash_directions)
         self.safety, self.body_safety = safety, body_safety
         self.effort, self.effort_range = effort, effort_range
-        self._settings = np.array([horizon, max_run, dash_depth, safety, body_safety, *effort_range], dtype=np.float64)
+        settings = {"horizon": horizon, "max_run": max_run, "dash_depth": dash_depth, "safety": safety,
+                    "body_safety": body_safety, "effort_low": effort_range[0], "effort_high": effort_range[1]}
+        self._settings = np.array([settings[name] for name in PLANNER_FIELDS], dtype=np.float64)
         self._directions = np.array([0.0] + [d for d in self.dash_directions if d != 0.0])
         angles = np.radians(END_ANGLES)
         self._ends = np.array([(r, math.cos(a), math.sin(a)) for r in END_RADII for a in angles])

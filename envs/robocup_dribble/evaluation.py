@@ -105,7 +105,8 @@ def running_ceiling(profile: str = "v19", n_players: int = 1000, cycles: int = 3
     state = physics.new_state(len(types))
     physics.recover(state, types, server_profile)
     state[:, physics.B_Y] = 1e3  # the ball is far away
-    commands = np.tile([physics.CMD_DASH, server_profile.server.max_dash_power, 0.0], (len(types), 1))
+    commands = np.zeros((len(types), physics.COMMAND_SIZE))
+    commands[:, physics.C_KIND], commands[:, physics.C_POWER] = physics.CMD_DASH, server_profile.server.max_dash_power
     uniforms = np.full((len(types), physics.N_UNIFORMS), 0.5)
     constants = physics.profile_constants(server_profile)
     for _ in range(cycles):

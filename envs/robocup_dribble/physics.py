@@ -3,8 +3,9 @@
 Every lane is an independent pitch with one player and one ball. The state of N lanes is one ``(N, STATE_SIZE)``
 float64 array (columns named by the ``P_*``, ``B_*`` and ``S_*`` constants), the player types one ``(N, TYPE_SIZE)``
 array (columns in :data:`robocup_dribble.player_types.TYPE_FIELDS` order) and the commands one ``(N, COMMAND_SIZE)``
-array. :func:`step` advances all lanes by one server cycle in a single compiled (numba) call, so one lane costs a few
-microseconds and thousands of lanes run without a Python loop.
+array; every layout is a tuple of field names (``*_FIELDS``) and the column constants are looked up in it by name.
+:func:`step` advances all lanes by one server cycle in a single compiled (numba) call; compiled code calls
+:func:`cycle`, one lane's cycle on scalars read from and written back to the 2-D arrays (no row views), directly.
 
 Formulas and their order follow the rcssserver source as restated in ``../shared/ref/rcssserver-physics.md``
 (cited below as "spec §n"); the numbers were checked against recordings of a real rcssserver 19.0.0
@@ -17,7 +18,9 @@ Formulas and their order follow the rcssserver source as restated in ``../shared
 4. stamina, effort and recovery update (spec §2.5).
 
 Randomness enters only through ``uniforms``, an ``(N, N_UNIFORMS)`` array of U[0, 1) draws the caller makes from
-its own generator; each has a fixed role (``U_*``). With zero noise parameters the server's ``drand`` returns the
+its own generator; each has a fixed role (``U_*``). Vector lengths are ``sqrt(x*x + y*y)`` as in the server's
+``Vector2D`` (before the flat kernel, ``math.hypot``: results differ in the last bits, far below the recordings'
+6 printed digits). With zero noise parameters the server's ``drand`` returns the
 midpoint of an empty range, so noise-free physics is exact whatever the draws are.
 
 Angles are radians inside the state (``P_BODY``) and degrees in commands, like the server.

@@ -141,7 +141,8 @@ def simulate_case(
     constants = physics.profile_constants(profile)
     states, events = [], []
     for command in case["commands"]:
-        commands = np.tile(np.array(parse_command(command), dtype=np.float64), (runs, 1))
+        commands = np.zeros((runs, physics.COMMAND_SIZE))
+        commands[:, physics.C_KIND], commands[:, physics.C_POWER], commands[:, physics.C_DIRECTION] = parse_command(command)
         uniforms = np.full((runs, physics.N_UNIFORMS), 0.5) if rng is None else rng.random((runs, physics.N_UNIFORMS))
         events.append(physics.step(state, types, commands, uniforms, constants))
         states.append(state.copy())
