@@ -5,14 +5,15 @@ Usage: ``python benchmarks/env_speed.py [--profile v19] [--seconds 2]``
 Two action streams are timed. "random": uniformly random action types and parameters drawn once from a fixed seed;
 the ball is lost within about two steps, so resets run at their worst rate. "holding": KICK_POSITION(0.6, 0.4) every
 cycle, which keeps the ball beside the player, so episodes run their full 35 actions as under a good dribbler (a
-mix of kicks and dashes costs about the same per step). Each measurement is
-the best of three runs of about ``--seconds`` / 3 each, which damps a shared machine's noise; the ratios compare
+mix of kicks and dashes costs about the same per step). Each figure is items per second of this process's CPU time
+(``time.process_time``: on a shared machine wall time would also count the time other processes hold the core;
+everything here runs on one thread), the best of three runs of about ``--seconds`` / 3 each; the ratios compare
 runs made seconds apart in the same process.
 
 Targets (one core): a single-env step <= 30 us (issue 2); ``DribbleVecEnv(4096).step_arrays`` (the array path)
 >= 3,000,000 player-steps/s with holding actions and >= 1,500,000 with random actions, and SB3's tuple ``step`` at
 N = 64 within 3x of ``step_arrays`` at N = 64 (issue 12). The load average is printed: on a shared machine the
-absolute figures drop with it, the ratios much less.
+absolute figures still drop with it (caches are shared), the ratios much less.
 """
 
 from __future__ import annotations
@@ -42,19 +43,19 @@ def as_tuple(kind: int, params: np.ndarray):
 
 
 def best_rate(run: Callable[[int], int], seconds: float) -> float:
-    """Largest items/s over three runs; ``run(k)`` does k iterations and returns the items processed."""
+    """Largest items per CPU second over three runs; ``run(k)`` does k iterations and returns the items processed."""
     iterations = 1
     while True:  # calibrate the iteration count to about a third of the budget
-        start = time.perf_counter()
+        start = time.process_time()
         run(iterations)
-        if time.perf_counter() - start > seconds / 30 or iterations > 1_000_000:
+        if time.process_time() - start > seconds / 30 or iterations > 1_000_000:
             break
         iterations *= 4
     rates = []
     for _ in range(3):
-        start = time.perf_counter()
+        start = time.process_time()
         items = run(iterations * 10)
-        rates.append(items / (time.perf_counter() - start))
+        rates.append(items / (time.process_time() - start))
     return max(rates)
 
 

@@ -247,13 +247,14 @@ def _first_invalid(kinds: np.ndarray, params: np.ndarray) -> int:
 _DRAW_BLOCK = 4096  # uniforms drawn from the Generator at least per refill of the buffer
 
 
-@njit(cache=True, error_model="numpy")
-def _start_lane(a: LaneArrays, k, c, recipe, i: int, uniforms, position, type_set, order_keys) -> bool:
+@njit(cache=True, error_model="numpy", inline="always")
+def _start_lane(state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns, k, c,
+                recipe, i: int, uniforms, position, type_set, order_keys) -> bool:
     """Start lane ``i``'s next episode: its next player type (a fresh set when the set is used up), its start state
     and its episode statistics. Returns False, committing nothing, if ``uniforms`` ran short (the caller draws more
     and calls again from the same position). ``type_set`` ``(1, player_types, TYPE_SIZE)`` and ``order_keys``
-    ``(player_types,)`` are scratch."""
-    state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns = a
+    ``(player_types,)`` are scratch. (The lane arrays come one by one: unpacking a tuple of them in a function called
+    per lane would update their reference counts every time, which cost more than the start itself.)"""
     used_types = set_types.shape[1]
     episode = episodes_in_set[i] % int(c[task.R_EPISODES_PER_TYPE_SET])
     if episode == 0:  # a new set, its types in random order; the lane keeps those its episodes use
@@ -286,12 +287,13 @@ def _start_lanes(a: LaneArrays, g: LaneSettings, player_types: int, lanes, first
     """Start ``lanes[first:]`` in order and write their observations; returns the index in ``lanes`` at which the
     uniforms ran short (that lane is not started), or ``len(lanes)``."""
     k, c, _, _, obs_low, obs_high, recipe = g
-    state, types = a.state, a.types
+    state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns = a
     type_set, order_keys = np.empty((1, player_types, a.types.shape[1])), np.empty(player_types)
     for row in range(first, lanes.shape[0]):
         i = lanes[row]
         start = position[0]
-        if not _start_lane(a, k, c, recipe, i, uniforms, position, type_set, order_keys):
+        if not _start_lane(state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns,
+                           k, c, recipe, i, uniforms, position, type_set, order_keys):
             position[0] = start
             return row
         task.observe(state, i, types, i, obs_low, obs_high, obs, row if by_row else i)

@@ -237,7 +237,7 @@ def _noise(r_max: float, u_r: float, u_a: float, box: bool) -> tuple[float, floa
     return radius * math.cos(angle), radius * math.sin(angle)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _leg_accel(power: float, direction: float, body: float, effort: float, dash_power_rate: float, k: np.ndarray):
     """Acceleration of a dash (or of one leg) with effective power ``power`` (spec §2.3; direction rate spec §2.2)."""
     rate = 1.0
@@ -252,7 +252,7 @@ def _leg_accel(power: float, direction: float, body: float, effort: float, dash_
     return sign * magnitude * math.cos(heading), sign * magnitude * math.sin(heading)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _dash(power, direction, body, pvx, pvy, stamina, effort, dash_power_rate, player_size, extra_stamina, u_turn, k):
     """A dash: returns the player's acceleration (x, y), its body and its stamina after the dash (spec §2.3, §2.4)."""
     power = min(max(power, k[K_MIN_DASH_POWER]), k[K_MAX_DASH_POWER])
@@ -353,7 +353,7 @@ def _recover_lanes(state, types, lanes, k) -> None:
         recover_lane(state, i, types, i, k)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
     """One server cycle of lane ``i`` of ``state`` with the type in row ``ti`` of ``types`` and the draws in row ``ui``
     of ``uniforms``, given the lane's command (``CMD_*`` kind, power or turn moment, direction in degrees).

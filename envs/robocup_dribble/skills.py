@@ -87,7 +87,7 @@ def as_env_actions(action_types: np.ndarray, params: np.ndarray) -> np.ndarray:
     return actions
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _kick_toward(state, i, types, ti, target_vx: float, target_vy: float, k: np.ndarray):
     """The kick command whose result is closest to giving the ball the velocity (target_vx, target_vy)."""
     ax, ay = target_vx - state[i, physics.B_VX], target_vy - state[i, physics.B_VY]
@@ -101,7 +101,7 @@ def _kick_toward(state, i, types, ti, target_vx: float, target_vy: float, k: np.
     return physics.CMD_KICK, power, math.degrees(physics.normalize_angle(math.atan2(ay, ax) - body))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def command(state, i, types, ti, kind: int, a: float, b: float, k: np.ndarray):
     """The server command ``(CMD_* kind, power, direction)`` of action type ``kind`` with parameters ``a`` (and ``b``
     for the two-parameter types), already within :func:`parameter_bounds`, for lane ``i`` (type row ``ti``)."""

@@ -150,7 +150,7 @@ def _polar(radius: float, unit_angle: float) -> tuple[float, float]:
     return radius * math.cos(angle), radius * math.sin(angle)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def start_lane(state, i, types, ti, uniforms, position, c, k) -> None:
     """Place player and ball of lane ``i`` (type row ``ti``) at the start of an episode and recover the player.
 
@@ -177,7 +177,7 @@ def start_lane(state, i, types, ti, uniforms, position, c, k) -> None:
     physics.recover_lane(state, i, types, ti, k)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def evaluate(state, i, types, ti, collided: bool, previous_x: float, c, k) -> tuple[float, bool]:
     """Reward and ball loss of lane ``i`` after a cycle in which the player was at ``previous_x`` before.
 
@@ -198,7 +198,7 @@ def evaluate(state, i, types, ti, collided: bool, previous_x: float, c, k) -> tu
     return reward, gap > reach
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def observe(state, i, types, ti, low, high, obs, oi) -> None:
     """Write lane ``i``'s observation (:data:`OBSERVATION_NAMES`, clipped to [low, high]) into row ``oi`` of ``obs``."""
     obs[oi, O_PLAYER_DECAY] = min(max(types[ti, physics.T_DECAY], low[O_PLAYER_DECAY]), high[O_PLAYER_DECAY])
