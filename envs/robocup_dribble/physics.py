@@ -24,6 +24,10 @@ its own generator; each has a fixed role (``U_*``). Vector lengths are ``sqrt(x*
 midpoint of an empty range, so noise-free physics is exact whatever the draws are.
 
 Angles are radians inside the state (``P_BODY``) and degrees in commands, like the server.
+
+The Python API (:func:`step`, :func:`recover`, :func:`profile_constants`, :func:`new_state`) checks shapes, dtypes
+and values before any compiled code runs. The compiled per-lane building blocks (:func:`cycle`, :func:`step_lane`,
+:func:`recover_lane`, ...) are for other compiled code and do no checks: from Python, use :func:`step`.
 """
 
 from __future__ import annotations

@@ -15,6 +15,10 @@ are all fields of :class:`DribbleTask` (constructor arguments of the envs):
   [0, ``start_player_speed``]; the ball uniform over the ring between ``start_clearance`` outside touching and
   ``start_clearance`` inside the kickable edge, with the player's velocity plus a random one of speed uniform in
   [0, ``start_ball_speed``].
+
+The compiled per-lane functions (:func:`start_lane`, :func:`evaluate`, :func:`observe`) are building blocks for the
+compiled loop of :mod:`robocup_dribble.lanes` and do no checks; Python code starts and steps lanes through
+:class:`robocup_dribble.lanes.DribbleLanes`, which checks its inputs first.
 """
 
 from __future__ import annotations

@@ -5,10 +5,9 @@ This module imports SB3 (and so torch); :mod:`robocup_dribble.env` does not.
 
 from __future__ import annotations
 
-import contextlib
 import gc
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any, NamedTuple
 
 import gymnasium as gym
@@ -48,18 +47,6 @@ class ArrayStep(NamedTuple):
     episode_info: Mapping[str, np.ndarray]
     """``"distance"`` (metres dribbled along +x, frozen at the last step with the ball) and ``"ball_lost"``
     (``(N,)`` bool), where ended."""
-
-
-@contextlib.contextmanager
-def _gc_paused() -> Iterator[None]:
-    """Pause Python's cyclic garbage collector: the objects made meanwhile form no reference cycles."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
 
 
 class DribbleVecEnv(VecEnv):
@@ -133,8 +120,10 @@ class DribbleVecEnv(VecEnv):
         dones = step.terminated | step.truncated
         finished = np.flatnonzero(dones).tolist()
         # Thousands of fresh dicts per step would otherwise set off collector passes over every live object;
-        # none of them forms a reference cycle.
-        with _gc_paused():
+        # none of them forms a reference cycle, so the collector is paused while they are made.
+        collecting = gc.isenabled()
+        gc.disable()
+        try:
             infos = [
                 {"distance": d, "ball_lost": b, "player_type": t}
                 for d, b, t in zip(step.episode_info["distance"].tolist(), step.terminated.tolist(), self._player_types)
@@ -150,6 +139,9 @@ class DribbleVecEnv(VecEnv):
                     info["TimeLimit.truncated"] = timeouts[j]
                     info["episode"] = {"r": returns[j], "l": lengths[j], "t": elapsed}
                     self._player_types[i] = self._lanes.player_type(i)
+        finally:
+            if collecting:
+                gc.enable()
         return step.observations, step.rewards.astype(np.float32), dones, infos
 
     def get_images(self) -> Sequence[np.ndarray | None]:
@@ -202,18 +194,23 @@ class DribbleVecEnv(VecEnv):
 def _parse_actions(actions: Sequence) -> tuple[np.ndarray, np.ndarray]:
     """N per-lane Tuple actions -> ``(N,)`` int64 action types and ``(N, 7)`` parameters.
 
-    The common case (integer types, numpy parameter vectors of the right sizes) takes one concatenation; anything
-    else goes through :func:`robocup_dribble.env.parse_action` lane by lane, which converts what it can and names
-    what is wrong. (The action types' range is checked with the parameters, by the lanes.)
+    The common case (integer types, real numpy parameter vectors of one dtype and the right sizes, as SB3 policies
+    and the action space give them) is read in one pass over the vectors' bytes; anything else goes through
+    :func:`robocup_dribble.env.parse_action` lane by lane, which converts what it can and names what is wrong. (The
+    action types' range is checked with the parameters, by the lanes.)
     """
     try:
         kind_list = [action[0] for action in actions]
         kinds = np.array(kind_list)
-        parts = [part for action in actions for part in action[1]]
         kind_types = set(map(type, kind_list))
-        if kinds.dtype.kind in "iu" and bool not in kind_types and np.bool_ not in kind_types and [part.size for part in parts] == list(skills.PARAM_SIZES) * len(actions):
-            params = np.concatenate(parts, axis=None, dtype=np.float64).reshape(len(actions), skills.N_PARAMS)
-            return kinds.astype(np.int64, copy=False), params
+        parts = [part for action in actions for part in action[1]]
+        dtypes = {part.dtype for part in parts}
+        if kinds.dtype.kind in "iu" and bool not in kind_types and np.bool_ not in kind_types and len(dtypes) == 1:
+            dtype = dtypes.pop()
+            raw = [part.tobytes() for part in parts]
+            if dtype.kind == "f" and [len(chunk) for chunk in raw] == [dtype.itemsize * size for size in skills.PARAM_SIZES] * len(actions):
+                params = np.frombuffer(b"".join(raw), dtype=dtype).reshape(len(actions), skills.N_PARAMS)
+                return kinds.astype(np.int64, copy=False), params.astype(np.float64)
     except (TypeError, ValueError, AttributeError, IndexError, KeyError):
         pass
     parsed = [parse_action(action) for action in actions]
