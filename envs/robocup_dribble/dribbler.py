@@ -125,7 +125,8 @@ class HandCodedDribbler:
         state, types = self._rebuild(obs)
         kinds = np.empty(obs.shape[0], dtype=np.int64)
         params = np.zeros((obs.shape[0], skills.N_PARAMS))
-        _plan(state, types, obs[:, O_KICK_RAND].copy(), self._constants, self._settings, self._ends, self._directions, kinds, params)
+        kick_rands = obs[:, O_KICK_RAND].copy()
+        _plan(state, types, kick_rands, self._constants, self._settings, self._ends, self._directions, kinds, params)
         return kinds, params
 
     def predict(self, obs: np.ndarray, state: Any = None, episode_start: Any = None, deterministic: bool = True):

@@ -23,7 +23,9 @@ RENDER_MODES = ("human", "rgb_array")
 TRAIL_LENGTH = 20
 
 
-def configure(profile: str | ServerProfile, noise: bool, render_mode: str | None, task_kwargs: dict) -> tuple[ServerProfile, DribbleTask]:
+def configure(
+    profile: str | ServerProfile, noise: bool, render_mode: str | None, task_kwargs: dict[str, Any]
+) -> tuple[ServerProfile, DribbleTask]:
     """Validate the shared constructor arguments of both envs."""
     if render_mode is not None and render_mode not in RENDER_MODES:
         raise ValueError(f"render_mode={render_mode!r} is not supported; choose one of {list(RENDER_MODES)} or None")
@@ -51,7 +53,9 @@ def parse_action(action: Any) -> tuple[int, np.ndarray]:
     except (TypeError, ValueError) as error:
         raise ValueError(f"An action must be (action_type, ({layout})) with real parameters, got {action!r:.300}") from error
     if sizes != skills.PARAM_SIZES:
-        raise ValueError(f"The parameter vectors of an action must have sizes {skills.PARAM_SIZES}, got {sizes} in {action!r:.300}")
+        raise ValueError(
+            f"The parameter vectors of an action must have sizes {skills.PARAM_SIZES}, got {sizes} in {action!r:.300}"
+        )
     return action_type_index(action_type), params
 
 
@@ -114,9 +118,11 @@ class DribbleEnv(gym.Env):
     ``render_mode`` (``"human"``, ``"rgb_array"`` or None) and the fields of :class:`DribbleTask` as keywords.
     """
 
-    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}  # noqa: RUF012  (Gymnasium declares it so)
 
-    def __init__(self, profile: str | ServerProfile = "v19", noise: bool = True, render_mode: str | None = None, **task_kwargs: Any) -> None:
+    def __init__(
+        self, profile: str | ServerProfile = "v19", noise: bool = True, render_mode: str | None = None, **task_kwargs: Any
+    ) -> None:
         self.profile, self.task = configure(profile, noise, render_mode, task_kwargs)
         self.render_mode = render_mode
         self._lanes = DribbleLanes(1, self.profile, self.task, self.np_random)
@@ -126,7 +132,7 @@ class DribbleEnv(gym.Env):
         self._player_type: Any = None  # None until the first reset
         self._ball_trail: deque = deque(maxlen=TRAIL_LENGTH)
         self._player_trail: deque = deque(maxlen=TRAIL_LENGTH)
-        self._renderer = None
+        self._renderer: Any = None
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
@@ -150,7 +156,8 @@ class DribbleEnv(gym.Env):
         if self.render_mode == "human":
             self.render()
         lost = bool(out.terminated[0])
-        return out.observations[0], float(out.rewards[0]), lost, bool(out.truncated[0]), self._info(float(out.distances[0]), lost)
+        info = self._info(float(out.distances[0]), lost)
+        return out.observations[0], float(out.rewards[0]), lost, bool(out.truncated[0]), info
 
     def render(self) -> np.ndarray | None:
         if self._player_type is None:
@@ -193,5 +200,8 @@ def render_frame(lanes: DribbleLanes, lane: int, ball_trail: Iterable, player_tr
         ball_size=ball_size,
         trail=np.array(list(ball_trail), dtype=np.float64).reshape(-1, 2),
         player_trail=np.array(list(player_trail), dtype=np.float64).reshape(-1, 2),
-        caption=f"type {int(lanes.type_ids[lane])} | step {int(lanes.steps[lane])}/{lanes.task.max_actions} | {lanes.distance[lane]:.1f} m",
+        caption=(
+            f"type {int(lanes.type_ids[lane])} | step {int(lanes.steps[lane])}/{lanes.task.max_actions} | "
+            f"{lanes.distance[lane]:.1f} m"
+        ),
     )

@@ -86,7 +86,9 @@ def evaluate_dribbling(
     return DribbleReport(np.array(distances), np.array(lost, dtype=bool))
 
 
-def reliability_test(policy: Any, n_players: int = 10_000, profile: str = "v19", seed: int = 0, **kwargs: Any) -> DribbleReport:
+def reliability_test(
+    policy: Any, n_players: int = 10_000, profile: str = "v19", seed: int = 0, **kwargs: Any
+) -> DribbleReport:
     """The paper's reliability test: ``n_players`` freshly generated players each dribble once from the centre.
 
     Every episode draws a new set of player types and plays one type of it (``episodes_per_type_set=1``).

@@ -117,7 +117,8 @@ def profile_constants(profile: ServerProfile) -> np.ndarray:
         "box_noise": profile.noise_shape == "box",
         "effort_bug": profile.effort_inc_uses_dec_thr,
     }
-    values = [getattr(profile.server, name) for name in SERVER_CONSTANT_FIELDS] + [float(behaviours[b]) for b in BEHAVIOUR_FIELDS]
+    values = [getattr(profile.server, name) for name in SERVER_CONSTANT_FIELDS]
+    values += [float(behaviours[name]) for name in BEHAVIOUR_FIELDS]
     return np.array(values, dtype=np.float64)
 
 
@@ -168,7 +169,8 @@ def check_array(name: str, array: np.ndarray, shape: tuple[int | None, ...], dty
     if not isinstance(array, np.ndarray) or array.dtype != dtype or not array.flags.c_contiguous:
         got = type(array).__name__ if not isinstance(array, np.ndarray) else f"{array.dtype} array"
         raise ValueError(f"{name} must be a C-contiguous {np.dtype(dtype)} numpy array, got {got}")
-    if array.ndim != len(shape) or any(want is not None and got != want for got, want in zip(array.shape, shape)):
+    mismatched = any(want is not None and got != want for got, want in zip(array.shape, shape, strict=False))
+    if array.ndim != len(shape) or mismatched:
         wanted = "(" + ", ".join("N" if want is None else str(want) for want in shape) + ("," if len(shape) == 1 else "") + ")"
         raise ValueError(f"{name} must have shape {wanted}, got {array.shape}")
 
@@ -176,7 +178,7 @@ def check_array(name: str, array: np.ndarray, shape: tuple[int | None, ...], dty
 def input_array(name: str, values: Any, shape: tuple[int | None, ...], dtype: type = np.float64) -> np.ndarray:
     """``values`` as a C-contiguous array of ``dtype`` (a copy only if needed), checked by :func:`check_array`."""
     try:
-        array = np.ascontiguousarray(values, dtype=dtype)
+        array: np.ndarray = np.ascontiguousarray(values, dtype=dtype)
     except (TypeError, ValueError) as error:
         raise ValueError(f"{name} must be convertible to a {np.dtype(dtype)} array, got {values!r:.200}") from error
     check_array(name, array, shape, dtype)

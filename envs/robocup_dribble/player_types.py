@@ -217,8 +217,9 @@ def type_recipe(profile: ServerProfile) -> TypeRecipe:
             if rule and not all(_passes(a + d * b, rule == ">0") for d in (lo[i], lo[i] + span[i])):
                 checks.append((a, b, rule == ">0"))
         check_start.append(len(checks))
-    check_a, check_b, strict = (np.array(values) for values in zip(*checks)) if checks else (np.empty(0),) * 3
-    column_step, column_a, column_b = (np.array(values) for values in zip(*(columns[name] for name in TYPE_FIELDS)))
+    check_a, check_b, strict = (np.array(values) for values in zip(*checks, strict=True)) if checks else (np.empty(0),) * 3
+    by_field = (columns[name] for name in TYPE_FIELDS)
+    column_step, column_a, column_b = (np.array(values) for values in zip(*by_field, strict=True))
     s = profile.server
     window = np.array([float(profile.hetero_acceptance == "speed_window"), s.max_power, s.player_speed_max_min - EPS])
     default = np.array(default_player_type(profile), dtype=np.float64)
@@ -271,10 +272,11 @@ def draw_type_set(recipe: TypeRecipe, buffer: np.ndarray, position: np.ndarray, 
             if not ok:
                 continue
             if window[0] > 0.5:  # step 9: the terminal speed must lie in the acceptance window
-                dash_power_rate = column_a[_DASH_POWER_RATE] + delta[column_step[_DASH_POWER_RATE]] * column_b[_DASH_POWER_RATE]
-                effort_max = column_a[_EFFORT_MAX] + delta[column_step[_EFFORT_MAX]] * column_b[_EFFORT_MAX]
-                decay = column_a[_DECAY] + delta[column_step[_DECAY]] * column_b[_DECAY]
-                speed_max = column_a[_SPEED_MAX] + delta[column_step[_SPEED_MAX]] * column_b[_SPEED_MAX]
+                dpr, eff, dec, spd = _DASH_POWER_RATE, _EFFORT_MAX, _DECAY, _SPEED_MAX
+                dash_power_rate = column_a[dpr] + delta[column_step[dpr]] * column_b[dpr]
+                effort_max = column_a[eff] + delta[column_step[eff]] * column_b[eff]
+                decay = column_a[dec] + delta[column_step[dec]] * column_b[dec]
+                speed_max = column_a[spd] + delta[column_step[spd]] * column_b[spd]
                 v = (window[1] * dash_power_rate * effort_max) / (1.0 - decay)
                 if not (window[2] < v < speed_max + EPS):
                     continue

@@ -47,7 +47,9 @@ ACTION_NAMES = ("DASH_MAX", "KICK_VELOCITY", "KICK_POSITION", "KICK_ALIGN")
 DASH_MAX, KICK_VELOCITY, KICK_POSITION, KICK_ALIGN = (ACTION_NAMES.index(name) for name in ACTION_NAMES)
 N_ACTION_TYPES = len(ACTION_NAMES)
 
-ACTION_PARAMS = (("dash_direction",), ("kick_speed", "kick_direction"), ("position_x", "position_y"), ("align_speed", "align_offset"))
+ACTION_PARAMS = (
+    ("dash_direction",), ("kick_speed", "kick_direction"), ("position_x", "position_y"), ("align_speed", "align_offset")
+)
 """The parameter names of each action type, in type order; a batch's ``(N, 7)`` parameters concatenate them."""
 PARAM_NAMES = tuple(name for names in ACTION_PARAMS for name in names)
 PARAM_SIZES = tuple(len(names) for names in ACTION_PARAMS)

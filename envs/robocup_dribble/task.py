@@ -122,7 +122,9 @@ def observation_space(profile: ServerProfile, task: DribbleTask) -> spaces.Box:
     kick_rand = spread(s.kick_rand, p.kickable_margin_delta_min, p.kickable_margin_delta_max, p.kick_rand_delta_factor)
     kick_rand = (max(0.0, kick_rand[0]), max(0.0, kick_rand[1]))
     reach = physics.kickable_radius(s.player_size, s.ball_size, margin[1]) + 0.25
-    ball_speed = max(s.ball_speed_max * (1 + math.sqrt(2) * s.ball_rand) * s.ball_decay, task.start_player_speed + task.start_ball_speed)
+    ball_speed = max(
+        s.ball_speed_max * (1 + math.sqrt(2) * s.ball_rand) * s.ball_decay, task.start_player_speed + task.start_ball_speed
+    )
     player_speed = max(s.player_speed_max * (1 + math.sqrt(2) * s.player_rand) * decay[1], task.start_player_speed)
     relative_speed = ball_speed + player_speed
     bounds = {
@@ -139,7 +141,7 @@ def observation_space(profile: ServerProfile, task: DribbleTask) -> spaces.Box:
         low32, high32 = (low_array - pad).astype(np.float32), (high_array + pad).astype(np.float32)
     finite = np.isfinite(low32) & np.isfinite(high32)
     if not finite.all():
-        names = [name for name, ok in zip(OBSERVATION_NAMES, finite) if not ok]
+        names = [name for name, ok in zip(OBSERVATION_NAMES, finite, strict=True) if not ok]
         raise ValueError(
             f"the settings give observation bounds beyond float32 for {names}; the start speeds and the profile's sizes, "
             f"speeds and type ranges must stay far below {float(np.finfo(np.float32).max):.3g}"
@@ -206,8 +208,9 @@ def evaluate(state, i, types, ti, collided: bool, previous_x: float, c, k) -> tu
 def observe(state, i, types, ti, low, high, obs, oi) -> None:
     """Write lane ``i``'s observation (:data:`OBSERVATION_NAMES`, clipped to [low, high]) into row ``oi`` of ``obs``."""
     obs[oi, O_PLAYER_DECAY] = min(max(types[ti, physics.T_DECAY], low[O_PLAYER_DECAY]), high[O_PLAYER_DECAY])
-    obs[oi, O_DASH_POWER_RATE] = min(max(types[ti, physics.T_DASH_POWER_RATE], low[O_DASH_POWER_RATE]), high[O_DASH_POWER_RATE])
-    obs[oi, O_KICKABLE_MARGIN] = min(max(types[ti, physics.T_KICKABLE_MARGIN], low[O_KICKABLE_MARGIN]), high[O_KICKABLE_MARGIN])
+    dpr, margin = O_DASH_POWER_RATE, O_KICKABLE_MARGIN
+    obs[oi, dpr] = min(max(types[ti, physics.T_DASH_POWER_RATE], low[dpr]), high[dpr])
+    obs[oi, margin] = min(max(types[ti, physics.T_KICKABLE_MARGIN], low[margin]), high[margin])
     obs[oi, O_KICK_RAND] = min(max(types[ti, physics.T_KICK_RAND], low[O_KICK_RAND]), high[O_KICK_RAND])
     px, py, pvx, pvy = state[i, physics.P_X], state[i, physics.P_Y], state[i, physics.P_VX], state[i, physics.P_VY]
     obs[oi, O_BALL_REL_X] = min(max(state[i, physics.B_X] - px, low[O_BALL_REL_X]), high[O_BALL_REL_X])

@@ -5,7 +5,8 @@ Usage::
     python -m robocup_dribble.validate [CASES.jsonl ...] [--verbose]
 
 Without files it replays the rcssserver 19.0.0 recordings shipped in :data:`GOLDEN_DIR` (``robocup_dribble/data/
-golden``, provenance and format in its ``README.md``). Each line of a file is one recorded case in that format: the server options, the
+golden``, provenance and format in its ``README.md``). Each line of a file is one recorded case in that format: the
+server options, the
 player type, the exact set-up, one command (or none) per cycle and the state the server printed after each cycle.
 The case is replayed from its set-up with a profile built from the recorded ``server::`` options and every printed
 number is compared with a tolerance of ``rtol * |recorded| + atol`` (the server prints 6 significant digits).

@@ -69,7 +69,14 @@ class DribbleVecEnv(VecEnv):
 
     metadata = DribbleEnv.metadata
 
-    def __init__(self, n_envs: int, profile: str | ServerProfile = "v19", noise: bool = True, render_mode: str | None = None, **task_kwargs: Any) -> None:
+    def __init__(
+        self,
+        n_envs: int,
+        profile: str | ServerProfile = "v19",
+        noise: bool = True,
+        render_mode: str | None = None,
+        **task_kwargs: Any,
+    ) -> None:
         self.profile, self.task = configure(profile, noise, render_mode, task_kwargs)
         self._lanes = DribbleLanes(n_envs, self.profile, self.task, seeding.np_random()[0])
         self.render_mode = render_mode
@@ -78,7 +85,7 @@ class DribbleVecEnv(VecEnv):
         self._all = np.arange(self.num_envs)
         self._t_start = time.time()
         self._player_types: list = [None] * self.num_envs
-        self._actions: Sequence | None = None
+        self._actions: np.ndarray | Sequence[Any] | None = None
         self._renderer: Any = None
         self._started = False
 
@@ -91,13 +98,14 @@ class DribbleVecEnv(VecEnv):
         self._started = True
         return obs
 
-    def step_async(self, actions: Sequence) -> None:
+    def step_async(self, actions: np.ndarray | Sequence[Any]) -> None:
         self._actions = actions
 
     def step_wait(self) -> VecEnvStepReturn:
         actions, self._actions = self._actions, None
         if actions is None or len(actions) != self.num_envs:
-            raise ValueError(f"step() needs one action per lane ({self.num_envs}), got {None if actions is None else len(actions)}")
+            got = None if actions is None else len(actions)
+            raise ValueError(f"step() needs one action per lane ({self.num_envs}), got {got}")
         return self.step_packed(*_parse_actions(actions))
 
     def step_arrays(self, action_types: np.ndarray, params: np.ndarray) -> ArrayStep:
@@ -124,9 +132,10 @@ class DribbleVecEnv(VecEnv):
         collecting = gc.isenabled()
         gc.disable()
         try:
+            distances, lost = step.episode_info["distance"].tolist(), step.terminated.tolist()
             infos = [
                 {"distance": d, "ball_lost": b, "player_type": t}
-                for d, b, t in zip(step.episode_info["distance"].tolist(), step.terminated.tolist(), self._player_types)
+                for d, b, t in zip(distances, lost, self._player_types, strict=True)
             ]
             if finished:
                 elapsed = round(time.time() - self._t_start, 6)
@@ -166,18 +175,20 @@ class DribbleVecEnv(VecEnv):
             self._renderer = None
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
-        return [getattr(self, attr_name)] * len(self._get_indices(indices))
+        return [getattr(self, attr_name)] * len(list(self._get_indices(indices)))
 
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
         setattr(self, attr_name, value)
 
-    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None, **method_kwargs: Any) -> list[Any]:
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: VecEnvIndices = None, **method_kwargs: Any
+    ) -> list[Any]:
         raise AttributeError(f"DribbleVecEnv has no per-lane sub-environments to call {method_name!r} on")
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
         """Lanes are not wrapped, but they report SB3 ``Monitor``'s episode statistics, so ``Monitor`` answers True
         (SB3's ``evaluate_policy`` asks this to know whether ``info["episode"]`` is there)."""
-        return [issubclass(wrapper_class, Monitor)] * len(self._get_indices(indices))
+        return [issubclass(wrapper_class, Monitor)] * len(list(self._get_indices(indices)))
 
     def _check_started(self) -> None:
         if not self._started:
@@ -191,7 +202,7 @@ class DribbleVecEnv(VecEnv):
         return self._renderer
 
 
-def _parse_actions(actions: Sequence) -> tuple[np.ndarray, np.ndarray]:
+def _parse_actions(actions: np.ndarray | Sequence[Any]) -> tuple[np.ndarray, np.ndarray]:
     """N per-lane Tuple actions -> ``(N,)`` int64 action types and ``(N, 7)`` parameters.
 
     The common case (integer types, real numpy parameter vectors of one dtype and the right sizes, as SB3 policies
@@ -208,7 +219,8 @@ def _parse_actions(actions: Sequence) -> tuple[np.ndarray, np.ndarray]:
         if kinds.dtype.kind in "iu" and bool not in kind_types and np.bool_ not in kind_types and len(dtypes) == 1:
             dtype = dtypes.pop()
             raw = [part.tobytes() for part in parts]
-            if dtype.kind == "f" and [len(chunk) for chunk in raw] == [dtype.itemsize * size for size in skills.PARAM_SIZES] * len(actions):
+            expected = [dtype.itemsize * size for size in skills.PARAM_SIZES] * len(actions)
+            if dtype.kind == "f" and [len(chunk) for chunk in raw] == expected:
                 params = np.frombuffer(b"".join(raw), dtype=dtype).reshape(len(actions), skills.N_PARAMS)
                 return kinds.astype(np.int64, copy=False), params.astype(np.float64)
     except (TypeError, ValueError, AttributeError, IndexError, KeyError):
