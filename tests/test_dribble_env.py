@@ -424,3 +424,18 @@ def test_any_action_is_taken_or_refused_with_value_error_and_nothing_changes(kin
         assert env.observation_space.contains(obs)
         assert not isinstance(kind, (bool, np.bool_, str, complex)) and kind is not None
         assert float(kind).is_integer() and 0 <= kind <= 3
+
+
+def test_random_stream_version_2_is_pinned():
+    """Seed 0's first episode under random stream version 2 (robocup_dribble.lanes); a change to the order or the
+    number of draws must bump RANDOM_STREAM_VERSION and this reference."""
+    from robocup_dribble.lanes import RANDOM_STREAM_VERSION
+
+    assert RANDOM_STREAM_VERSION == 2
+    env = DribbleEnv()
+    obs, _ = env.reset(seed=0)
+    np.testing.assert_allclose(obs, [0.48255113, 0.0060132714, 0.74589932, 0.14589931, -0.80859733, 0.21261503, 0.057299733,
+                                     0.05839486, 0.073888212, -0.045026038], rtol=1e-6)
+    obs, reward, *_ = env.step(action(skills.KICK_VELOCITY, [0, 0.5, 10, 0, 0, 0, 0]))
+    np.testing.assert_allclose(obs[4:], [-0.38423112, 0.36308229, 0.43318358, 0.12052299, 0.036160424, -0.022063993], rtol=1e-5)
+    assert reward == pytest.approx(3.7467974, rel=1e-6)
