@@ -69,7 +69,7 @@ class LaneStep(NamedTuple):
     terminated: np.ndarray  # (N,) bool: the ball was lost
     truncated: np.ndarray  # (N,) bool: max_actions reached with the ball
     distances: np.ndarray  # (N,) the metres dribbled in the episode so far (before any reset)
-    terminal_observations: np.ndarray  # (N, 10) float32, where ended and reset (else zero)
+    terminal_observations: np.ndarray  # (N, 10) float32: the episode's last observation, where ended (else zero)
     episode_returns: np.ndarray  # (N,) float64
     episode_lengths: np.ndarray  # (N,) int64
 
@@ -168,10 +168,9 @@ class DribbleLanes:
         ended = _step_lanes(
             a.state, a.types, a.steps, a.start_x, a.distance, a.returns, g.k, g.c, g.param_low, g.param_high, g.obs_low,
             g.obs_high, kinds, params, physics_uniforms, out.observations, out.rewards, out.terminated, out.truncated,
-            out.distances, out.episode_returns, out.episode_lengths,
+            out.distances, out.terminal_observations, out.episode_returns, out.episode_lengths,
         )  # separate arrays: numba unpacks them faster than NamedTuples
         if autoreset and len(ended):
-            out.terminal_observations[ended] = out.observations[ended]
             self._start(ended, out.observations, by_row=False)
         return out
 
@@ -302,7 +301,7 @@ def _start_lanes(a: LaneArrays, g: LaneSettings, player_types: int, lanes, first
 
 @njit(cache=True, error_model="numpy")
 def _step_lanes(state, types, steps, start_x, distance, returns, k, c, param_low, param_high, obs_low, obs_high,
-                kinds, params, uniforms, obs, rewards, terminated, truncated, distances, episode_returns,
+                kinds, params, uniforms, obs, rewards, terminated, truncated, distances, terminal_obs, episode_returns,
                 episode_lengths) -> np.ndarray:
     """skills -> physics -> task for every lane (lane ``i`` uses ``uniforms[i]``); writes the :class:`LaneStep`
     fields it names and returns the lanes whose episode ended, in order."""
@@ -329,6 +328,8 @@ def _step_lanes(state, types, steps, start_x, distance, returns, k, c, param_low
         task.observe(state, i, types, i, obs_low, obs_high, obs, i)
         if lost or ended_by_limit:
             episode_returns[i], episode_lengths[i] = returns[i], steps[i]
+            for j in range(obs.shape[1]):
+                terminal_obs[i, j] = obs[i, j]
             ended[n_ended] = i
             n_ended += 1
     return ended[:n_ended]
