@@ -218,12 +218,12 @@ def _parse_actions(actions: np.ndarray | Sequence[Any]) -> tuple[np.ndarray, np.
         dtypes = {part.dtype for part in parts}
         if kinds.dtype.kind in "iu" and bool not in kind_types and np.bool_ not in kind_types and len(dtypes) == 1:
             dtype = dtypes.pop()
-            raw = [part.tobytes() for part in parts]
             expected = [dtype.itemsize * size for size in skills.PARAM_SIZES] * len(actions)
-            if dtype.kind == "f" and [len(chunk) for chunk in raw] == expected:
-                params = np.frombuffer(b"".join(raw), dtype=dtype).reshape(len(actions), skills.N_PARAMS)
+            if dtype.kind == "f" and [part.nbytes for part in parts] == expected:
+                joined = b"".join(parts)  # the vectors' buffers (a non-contiguous one raises BufferError)
+                params = np.frombuffer(joined, dtype=dtype).reshape(len(actions), skills.N_PARAMS)
                 return kinds.astype(np.int64, copy=False), params.astype(np.float64)
-    except (TypeError, ValueError, AttributeError, IndexError, KeyError):
+    except (TypeError, ValueError, AttributeError, IndexError, KeyError, BufferError):
         pass
     parsed = [parse_action(action) for action in actions]
     return np.array([k for k, _ in parsed], dtype=np.int64), np.stack([p for _, p in parsed])
