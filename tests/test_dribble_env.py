@@ -439,3 +439,19 @@ def test_random_stream_version_2_is_pinned():
     obs, reward, *_ = env.step(action(skills.KICK_VELOCITY, [0, 0.5, 10, 0, 0, 0, 0]))
     np.testing.assert_allclose(obs[4:], [-0.38423112, 0.36308229, 0.43318358, 0.12052299, 0.036160424, -0.022063993], rtol=1e-5)
     assert reward == pytest.approx(3.7467974, rel=1e-6)
+
+
+@pytest.mark.parametrize("make_part", [lambda v: v.astype(np.float32), lambda v: v.astype(np.float64),
+                                       lambda v: np.ascontiguousarray(v[::-1]).astype(np.float32)[::-1], list])
+def test_tuple_actions_of_any_real_layout_step_like_their_arrays(make_part):
+    """Float32 or float64 vectors, non-contiguous views and lists all give the transitions of their values."""
+    rng = np.random.default_rng(5)
+    a, b = DribbleVecEnv(3), DribbleVecEnv(3)
+    a.seed(1), b.seed(1)
+    a.reset(), b.reset()
+    for _ in range(10):
+        kinds = rng.integers(4, size=3)
+        params = (rng.uniform(-1, 1, (3, 7)) * [90, 1, 30, 1, 1, 1, 1]).astype(np.float32).astype(np.float64)
+        step = a.step_arrays(kinds, params)
+        obs, _, _, _ = b.step([(int(k), tuple(make_part(p[s]) for s in skills.PARAM_SLICES)) for k, p in zip(kinds, params)])
+        np.testing.assert_array_equal(step.observations, obs)
