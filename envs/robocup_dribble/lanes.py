@@ -1,7 +1,7 @@
 """N independent dribbling lanes: the one code path under both :class:`DribbleEnv` and :class:`DribbleVecEnv`.
 
-A step runs skills -> physics -> task for all lanes in one compiled loop, and (if asked) starts the next episode of
-every lane whose episode ended inside the same loop: no Python object is made per lane. Each lane also keeps its
+A step runs skills -> physics -> task for all lanes in one compiled loop and then (if asked) starts the next episode
+of every lane whose episode ended in a second one: no Python object is made per lane. Each lane also keeps its
 heterogeneous player types: every ``episodes_per_type_set`` episodes it draws a fresh set with the server's generator
 rules (:func:`robocup_dribble.player_types.draw_type_set`), and each episode of the set uses a different type of it
 (in random order).
