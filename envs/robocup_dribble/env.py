@@ -45,12 +45,12 @@ def parse_action(action: Any) -> tuple[int, np.ndarray]:
     :raises ValueError: unless ``k`` is an integer (a Python or numpy integer, or an integral real number; not a
         bool) in 0..3 and the parts are real vectors of sizes :data:`robocup_dribble.skills.PARAM_SIZES`.
     """
-    layout = ", ".join(f"{names[0].split('_')[0]} ({len(names)},)" for names in skills.ACTION_PARAMS)
     try:
         action_type, parts = action
         sizes = tuple(part.size if type(part) is np.ndarray else np.size(part) for part in parts)
         params = np.concatenate(parts, axis=None, dtype=np.float64)  # axis=None flattens each part
     except (TypeError, ValueError) as error:
+        layout = ", ".join(f"{names[0].split('_')[0]} ({len(names)},)" for names in skills.ACTION_PARAMS)
         raise ValueError(f"An action must be (action_type, ({layout})) with real parameters, got {action!r:.300}") from error
     if sizes != skills.PARAM_SIZES:
         raise ValueError(
@@ -180,9 +180,9 @@ class DribbleEnv(gym.Env):
         return {"distance": distance, "ball_lost": lost, "player_type": self._player_type}
 
     def _remember_positions(self) -> None:
-        s = self._lanes.state[0]
-        self._ball_trail.append((s[physics.B_X], s[physics.B_Y]))
-        self._player_trail.append((s[physics.P_X], s[physics.P_Y]))
+        s = self._lanes.state
+        self._ball_trail.append((s[0, physics.B_X], s[0, physics.B_Y]))
+        self._player_trail.append((s[0, physics.P_X], s[0, physics.P_Y]))
 
 
 def render_frame(lanes: DribbleLanes, lane: int, ball_trail: Iterable, player_trail: Iterable) -> Any:

@@ -110,14 +110,16 @@ class DribbleLanes:
             distance=np.zeros(n),
             returns=np.zeros(n),
         )
+        # the arrays by name too (they are updated in place, never replaced)
+        a = self.arrays
+        self.state, self.types, self.set_types, self.set_ids = a.state, a.types, a.set_types, a.set_ids
+        self.episodes_in_set, self.type_ids, self.steps = a.episodes_in_set, a.type_ids, a.steps
+        self.start_x, self.distance, self.returns = a.start_x, a.distance, a.returns
+        g = self._settings
+        self._step_arrays = (a.state, a.types, a.steps, a.start_x, a.distance, a.returns, g.k, g.c, g.param_low,
+                             g.param_high, g.obs_low, g.obs_high)  # the fixed leading arguments of _step_lanes
         self._uniforms = np.empty(0)  # values drawn from rng and not used yet
         self._position = np.zeros(1, dtype=np.int64)  # the next one to use
-
-    def __getattr__(self, name: str) -> np.ndarray:
-        """The per-lane arrays by name (``lanes.state``, ``lanes.type_ids``, ...)."""
-        if name in LaneArrays._fields:
-            return getattr(self.__dict__["arrays"], name)
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def reseed(self, rng: np.random.Generator) -> None:
         """Draw everything from ``rng`` from now on and start new type sets in every lane."""
@@ -164,12 +166,8 @@ class DribbleLanes:
             episode_lengths=np.zeros(n, dtype=np.int64),
         )
         physics_uniforms = self._take(n * physics.N_UNIFORMS).reshape(n, physics.N_UNIFORMS)
-        a, g = self.arrays, self._settings
-        ended = _step_lanes(
-            a.state, a.types, a.steps, a.start_x, a.distance, a.returns, g.k, g.c, g.param_low, g.param_high, g.obs_low,
-            g.obs_high, kinds, params, physics_uniforms, out.observations, out.rewards, out.terminated, out.truncated,
-            out.distances, out.terminal_observations, out.episode_returns, out.episode_lengths,
-        )  # separate arrays: numba unpacks them faster than NamedTuples
+        # separate arrays, in LaneStep's order for the outputs: numba unpacks them faster than NamedTuples
+        ended = _step_lanes(*self._step_arrays, kinds, params, physics_uniforms, *out)
         if autoreset and len(ended):
             self._start(ended, out.observations, by_row=False)
         return out
