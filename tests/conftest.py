@@ -1,4 +1,4 @@
-"""Shared fixtures: the recorded rcssserver cases in ../shared/golden (cloned beside the repository)."""
+"""Shared fixtures: the recorded rcssserver 19.0.0 cases shipped in ``robocup_dribble/data/golden``."""
 
 from __future__ import annotations
 
@@ -6,12 +6,12 @@ from pathlib import Path
 
 import pytest
 
-GOLDEN = Path(__file__).resolve().parents[1].parent / "shared" / "golden"
+from robocup_dribble.validate import GOLDEN_DIR
 
 
 def golden_file(name: str) -> Path:
     """A file of the recorded server data; the test fails (not skips) if the data is missing."""
-    path = GOLDEN / name
+    path = GOLDEN_DIR / name
     if not path.is_file():
-        pytest.fail(f"{path} is missing: clone the repository with shared/ beside it (see README)")
+        pytest.fail(f"{path} is missing: it ships with the package (robocup_dribble/data/golden)")
     return path

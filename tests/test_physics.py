@@ -207,3 +207,26 @@ def test_step_rejects_mismatched_shapes():
     with pytest.raises(ValueError, match="commands must have shape"):
         physics.step(state, np.zeros((2, physics.TYPE_SIZE)), np.zeros((3, 3)), np.zeros((2, physics.N_UNIFORMS)),
                      physics.profile_constants(V19))
+
+
+@pytest.mark.parametrize(
+    ("state", "types", "commands", "message"),
+    [
+        (np.zeros((2, physics.STATE_SIZE), dtype=np.float32), np.zeros((2, physics.TYPE_SIZE)), np.zeros((2, 3)), "state must be"),
+        (np.zeros((2, physics.STATE_SIZE))[:, ::-1], np.zeros((2, physics.TYPE_SIZE)), np.zeros((2, 3)), "C-contiguous"),
+        (np.zeros((2, 5)), np.zeros((2, physics.TYPE_SIZE)), np.zeros((2, 3)), "state must have shape"),
+        (np.zeros((2, physics.STATE_SIZE)), np.zeros((2, 3)), np.zeros((2, 3)), "types must have shape"),
+        (np.zeros((2, physics.STATE_SIZE)), np.zeros((2, physics.TYPE_SIZE)), np.full((2, 3), 7.0), "command kinds"),
+        (np.zeros((2, physics.STATE_SIZE)), np.zeros((2, physics.TYPE_SIZE)), [["dash", 1, 2]] * 2, "commands must be"),
+    ],
+)
+def test_step_checks_arrays_before_the_kernel_and_changes_nothing(state, types, commands, message):
+    kept = np.array(state, copy=True)
+    with pytest.raises(ValueError, match=message):
+        physics.step(state, types, commands, np.zeros((2, physics.N_UNIFORMS)), physics.profile_constants(V19))
+    np.testing.assert_array_equal(state, kept)
+
+
+def test_recover_checks_its_arrays():
+    with pytest.raises(ValueError, match="types must have shape"):
+        physics.recover(physics.new_state(3), np.zeros((2, physics.TYPE_SIZE)), V19)

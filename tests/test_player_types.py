@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,16 +21,14 @@ from robocup_dribble.player_types import (
     generate_player_types,
     stack_player_types,
 )
+from tests.conftest import golden_file
 
-GOLDEN = Path(__file__).parents[1] / ".." / "shared" / "golden" / "rcss-player-types.json"
 SEEDS = st.integers(min_value=0, max_value=2**32 - 1)
 
 
 @pytest.fixture(scope="module")
 def golden() -> dict:
-    if not GOLDEN.exists():
-        pytest.skip(f"golden data not found at {GOLDEN}")
-    return json.loads(GOLDEN.read_text())
+    return json.loads(golden_file("rcss-player-types.json").read_text())
 
 
 def assert_matches_printed(types: list[PlayerType], printed: list[dict]) -> None:
@@ -248,15 +245,22 @@ def test_default_type_after_1000_failed_trials(n_sets):
 def test_a_rejected_trial_draws_nothing_more():
     """Spec §7.2: a rejection ends the trial at once; the next trial starts again from the first draw."""
     profile = with_player(dataclasses.replace(make_profile("v19", kick_rand=0.0), hetero_acceptance="none"), player_types=2)
-    script = iter([0.5, 0.5, 0.2, 0.5, 0.5, 0.9, 0.25, 0.5])  # trial 1 stops after the kickable margin (kick_rand < 0)
-    used = []
+    script = [0.5, 0.5, 0.2, 0.5, 0.5, 0.9, 0.25, 0.5]  # trial 1 stops after the kickable margin (kick_rand < 0)
 
-    def uniform(lo, hi, n):
-        used.append(n)
-        return lo + (hi - lo) * np.array([next(script) for _ in range(n)])
+    class Scripted:  # the script, then 0.5s; draw_type_table gives back what it fetched beyond its needs
+        used = 0
 
+        def __call__(self, lo, hi, n):
+            values = (script + [0.5] * n)[self.used : self.used + n]
+            self.used += n
+            return lo + (hi - lo) * np.array(values)
+
+        def unread(self, n):
+            self.used -= n
+
+    uniform = Scripted()
     t = PlayerType.from_array(draw_type_table(profile, 1, uniform)[0, 1])
-    assert sum(used) == 8  # decay, dash power rate, margin; then decay, dash power rate, margin, extra stamina, stretch
+    assert uniform.used == 8  # decay, dash power rate, margin; then decay, dash power rate, margin, extra stamina, stretch
     assert t.kickable_margin == pytest.approx(0.7 + 0.08) and t.kick_rand == pytest.approx(0.08)
     assert t.extra_stamina == pytest.approx(62.5) and t.effort_max == pytest.approx(0.95)
     assert t.catchable_area_l_stretch == pytest.approx(1.15) and t.player_decay == pytest.approx(0.4)

@@ -43,6 +43,10 @@ from numba import njit
 from robocup_dribble import physics, skills
 from robocup_dribble.params import ServerProfile, make_profile, without_noise
 from robocup_dribble.player_types import default_player_type, stack_player_types
+from robocup_dribble.task import (
+    O_BALL_REL_VX, O_BALL_REL_VY, O_BALL_REL_X, O_BALL_REL_Y, O_DASH_POWER_RATE, O_KICK_RAND, O_KICKABLE_MARGIN,
+    O_PLAYER_DECAY, O_PLAYER_VX, O_PLAYER_VY,
+)  # fmt: skip
 
 # Where a planned run may leave the ball beside the player: radius as a fraction of the ring between touching and the
 # kickable edge, and angle from the running direction (degrees; adding straight ahead and behind changed nothing).
@@ -53,7 +57,10 @@ EXTREME_CLEARANCE = 0.5  # share of the clearances a dash must keep under the lo
 LOST = -1e3  # score of a branch that loses the ball (plus the cycles it kept the ball)
 
 # the planner's settings, as one float vector for the compiled code
-G_HORIZON, G_MAX_RUN, G_DASH_DEPTH, G_EDGE, G_BODY, G_EFFORT_LOW, G_EFFORT_HIGH = range(7)
+PLANNER_FIELDS = ("horizon", "max_run", "dash_depth", "safety", "body_safety", "effort_low", "effort_high")
+G_HORIZON, G_MAX_RUN, G_DASH_DEPTH, G_EDGE, G_BODY, G_EFFORT_LOW, G_EFFORT_HIGH = (
+    PLANNER_FIELDS.index(name) for name in PLANNER_FIELDS
+)
 
 
 class HandCodedDribbler:
@@ -103,7 +110,9 @@ class HandCodedDribbler:
         self.dash_directions = tuple(float(d) for d in dash_directions)
         self.safety, self.body_safety = safety, body_safety
         self.effort, self.effort_range = effort, effort_range
-        self._settings = np.array([horizon, max_run, dash_depth, safety, body_safety, *effort_range], dtype=np.float64)
+        settings = {"horizon": horizon, "max_run": max_run, "dash_depth": dash_depth, "safety": safety,
+                    "body_safety": body_safety, "effort_low": effort_range[0], "effort_high": effort_range[1]}
+        self._settings = np.array([settings[name] for name in PLANNER_FIELDS], dtype=np.float64)
         self._directions = np.array([0.0] + [d for d in self.dash_directions if d != 0.0])
         angles = np.radians(END_ANGLES)
         self._ends = np.array([(r, math.cos(a), math.sin(a)) for r in END_RADII for a in angles])
@@ -116,7 +125,8 @@ class HandCodedDribbler:
         state, types = self._rebuild(obs)
         kinds = np.empty(obs.shape[0], dtype=np.int64)
         params = np.zeros((obs.shape[0], skills.N_PARAMS))
-        _plan(state, types, obs[:, 3].copy(), self._constants, self._settings, self._ends, self._directions, kinds, params)
+        kick_rands = obs[:, O_KICK_RAND].copy()
+        _plan(state, types, kick_rands, self._constants, self._settings, self._ends, self._directions, kinds, params)
         return kinds, params
 
     def predict(self, obs: np.ndarray, state: Any = None, episode_start: Any = None, deterministic: bool = True):
@@ -130,17 +140,18 @@ class HandCodedDribbler:
         m = obs.shape[0]
         server = self.profile.server
         types = np.tile(self._default_type, (m, 1))
-        types[:, physics.T_DECAY] = obs[:, 0]
+        types[:, physics.T_DECAY] = obs[:, O_PLAYER_DECAY]
         inertia_factor = self.profile.player.inertia_moment_delta_factor
-        types[:, physics.T_INERTIA] = server.inertia_moment + (obs[:, 0] - server.player_decay) * inertia_factor
-        types[:, physics.T_DASH_POWER_RATE] = obs[:, 1]
-        types[:, physics.T_KICKABLE_MARGIN] = obs[:, 2]
+        types[:, physics.T_INERTIA] = server.inertia_moment + (obs[:, O_PLAYER_DECAY] - server.player_decay) * inertia_factor
+        types[:, physics.T_DASH_POWER_RATE] = obs[:, O_DASH_POWER_RATE]
+        types[:, physics.T_KICKABLE_MARGIN] = obs[:, O_KICKABLE_MARGIN]
         types[:, physics.T_EFFORT_MAX] = self.effort
         state = physics.new_state(m)
         physics.recover(state, types, self.profile)
-        state[:, physics.P_VX], state[:, physics.P_VY] = obs[:, 8], obs[:, 9]
-        state[:, physics.B_X], state[:, physics.B_Y] = obs[:, 4], obs[:, 5]
-        state[:, physics.B_VX], state[:, physics.B_VY] = obs[:, 6] + obs[:, 8], obs[:, 7] + obs[:, 9]
+        state[:, physics.P_VX], state[:, physics.P_VY] = obs[:, O_PLAYER_VX], obs[:, O_PLAYER_VY]
+        state[:, physics.B_X], state[:, physics.B_Y] = obs[:, O_BALL_REL_X], obs[:, O_BALL_REL_Y]
+        state[:, physics.B_VX] = obs[:, O_BALL_REL_VX] + obs[:, O_PLAYER_VX]
+        state[:, physics.B_VY] = obs[:, O_BALL_REL_VY] + obs[:, O_PLAYER_VY]
         return state, types
 
 
@@ -184,11 +195,11 @@ def _kick_reach(s, t, k) -> float:
     """The largest change of ball velocity a kick can make in this state (spec §3), 0 if the ball is not kickable."""
     rx, ry = s[physics.B_X] - s[physics.P_X], s[physics.B_Y] - s[physics.P_Y]
     distance = math.hypot(rx, ry)
-    if distance > t[physics.T_SIZE] + k[physics.K_BALL_SIZE] + t[physics.T_KICKABLE_MARGIN]:
+    if distance > physics.kickable_radius(t[physics.T_SIZE], k[physics.K_BALL_SIZE], t[physics.T_KICKABLE_MARGIN]):
         return 0.0
     dir_diff = abs(physics.normalize_angle(math.atan2(ry, rx) - s[physics.P_BODY]))
     dist_ball = distance - t[physics.T_SIZE] - k[physics.K_BALL_SIZE]
-    rate = t[physics.T_KICK_POWER_RATE] * (1.0 - 0.25 * dir_diff / math.pi - 0.25 * dist_ball / t[physics.T_KICKABLE_MARGIN])
+    rate = physics.kick_rate(t[physics.T_KICK_POWER_RATE], dir_diff, dist_ball, t[physics.T_KICKABLE_MARGIN])
     return min(rate * k[physics.K_MAX_POWER], k[physics.K_BALL_ACCEL_MAX])
 
 
@@ -267,7 +278,7 @@ def _plan_kicks(s, t, kick_rand, k, g, ends, paths, best_v, best_slack, runs) ->
     """
     max_run = best_v.shape[0] - 1
     touching = t[physics.T_SIZE] + k[physics.K_BALL_SIZE]
-    reach = touching + t[physics.T_KICKABLE_MARGIN]
+    reach = physics.kickable_radius(t[physics.T_SIZE], k[physics.K_BALL_SIZE], t[physics.T_KICKABLE_MARGIN])
     decay = k[physics.K_BALL_DECAY]
     speed_max2 = k[physics.K_BALL_SPEED_MAX] ** 2
     dv_max = _kick_reach(s, t, k)
@@ -321,7 +332,7 @@ def _plan_kicks(s, t, kick_rand, k, g, ends, paths, best_v, best_slack, runs) ->
 def _safe(s, t, k, edge, body, collided) -> bool:
     """No collision, and the ball at least ``edge`` inside the kickable area and ``body`` clear of the player."""
     touching = t[physics.T_SIZE] + k[physics.K_BALL_SIZE]
-    reach = touching + t[physics.T_KICKABLE_MARGIN]
+    reach = physics.kickable_radius(t[physics.T_SIZE], k[physics.K_BALL_SIZE], t[physics.T_KICKABLE_MARGIN])
     gap = _gap(s)
     return (not collided) and gap <= reach - edge and gap >= touching + body
 
@@ -333,7 +344,7 @@ def _rollout(s, t, kick_rand, k, g, ends, vx, vy, n, elapsed, x0, work) -> float
     carries into the next cycle); a branch that loses the ball scores ``LOST`` plus the cycles it kept the ball."""
     command, p, uniforms, events, paths, best_v, best_slack = work
     horizon = int(g[G_HORIZON])
-    reach = t[physics.T_SIZE] + k[physics.K_BALL_SIZE] + t[physics.T_KICKABLE_MARGIN]
+    reach = physics.kickable_radius(t[physics.T_SIZE], k[physics.K_BALL_SIZE], t[physics.T_KICKABLE_MARGIN])
     while True:
         _kick_params(s, vx, vy, p)
         if _act(s, t, skills.KICK_VELOCITY, p, k, command, uniforms, events) or _gap(s) > reach:

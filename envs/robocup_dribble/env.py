@@ -1,19 +1,18 @@
-"""Gymnasium environments: one dribbling lane (:class:`DribbleEnv`) and N lanes as an SB3 VecEnv (:class:`DribbleVecEnv`)."""
+"""The Gymnasium environment of one dribbling lane (:class:`DribbleEnv`) and what it shares with the vector env.
+
+This module needs Gymnasium and numpy only; :class:`robocup_dribble.vec_env.DribbleVecEnv` (N lanes as a
+Stable-Baselines3 ``VecEnv``) lives in its own module, so that ``DribbleEnv`` can be used without SB3 and torch.
+"""
 
 from __future__ import annotations
 
-import contextlib
-import gc
-import time
 from collections import deque
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium.utils import seeding
-from stable_baselines3.common.monitor import Monitor
-from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
+from gymnasium.error import ResetNeeded
 
 from robocup_dribble import physics, skills
 from robocup_dribble.lanes import DribbleLanes
@@ -24,7 +23,9 @@ RENDER_MODES = ("human", "rgb_array")
 TRAIL_LENGTH = 20
 
 
-def _configure(profile: str | ServerProfile, noise: bool, render_mode: str | None, task_kwargs: dict) -> tuple[ServerProfile, DribbleTask]:
+def configure(
+    profile: str | ServerProfile, noise: bool, render_mode: str | None, task_kwargs: dict[str, Any]
+) -> tuple[ServerProfile, DribbleTask]:
     """Validate the shared constructor arguments of both envs."""
     if render_mode is not None and render_mode not in RENDER_MODES:
         raise ValueError(f"render_mode={render_mode!r} is not supported; choose one of {list(RENDER_MODES)} or None")
@@ -39,20 +40,35 @@ def _configure(profile: str | ServerProfile, noise: bool, render_mode: str | Non
 
 
 def parse_action(action: Any) -> tuple[int, np.ndarray]:
-    """``(k, (p_dash, p_kick_velocity, p_kick_position, p_kick_align))`` -> ``(k, (7,) params)``."""
+    """``(k, (p_dash, p_kick_velocity, p_kick_position, p_kick_align))`` -> ``(k, (7,) params)``.
+
+    :raises ValueError: unless ``k`` is an integer (a Python or numpy integer, or an integral real number; not a
+        bool) in 0..3 and the parts are real vectors of sizes :data:`robocup_dribble.skills.PARAM_SIZES`.
+    """
     try:
         action_type, parts = action
-        params = np.concatenate(parts, axis=None, dtype=np.float64)  # axis=None flattens each part
         sizes = tuple(part.size if type(part) is np.ndarray else np.size(part) for part in parts)
+        params = np.concatenate(parts, axis=None, dtype=np.float64)  # axis=None flattens each part
     except (TypeError, ValueError) as error:
+        layout = ", ".join(f"{names[0].split('_')[0]} ({len(names)},)" for names in skills.ACTION_PARAMS)
+        raise ValueError(f"An action must be (action_type, ({layout})) with real parameters, got {action!r:.300}") from error
+    if sizes != skills.PARAM_SIZES:
         raise ValueError(
-            f"An action must be (action_type, (dash (1,), kick_velocity (2,), kick_position (2,), kick_align (2,))), got {action!r}"
-        ) from error
-    if sizes != (1, 2, 2, 2):
-        raise ValueError(f"The parameter vectors of an action must have sizes (1, 2, 2, 2), got {sizes} in {action!r}")
-    if isinstance(action_type, (bool, np.bool_)) or not float(action_type).is_integer():
+            f"The parameter vectors of an action must have sizes {skills.PARAM_SIZES}, got {sizes} in {action!r:.300}"
+        )
+    return action_type_index(action_type), params
+
+
+def action_type_index(action_type: Any) -> int:
+    """``action_type`` as an int in 0..3; a Python or numpy integer or an integral real number, not a bool.
+
+    :raises ValueError: for anything else (None, a bool, a complex number, a string, 1.5, 7, ...).
+    """
+    if isinstance(action_type, (bool, np.bool_)) or not isinstance(action_type, (int, float, np.integer, np.floating)):
         raise ValueError(f"The action type must be an integer in 0..{skills.N_ACTION_TYPES - 1}, got {action_type!r}")
-    return int(action_type), params
+    if not (float(action_type).is_integer() and 0 <= action_type < skills.N_ACTION_TYPES):
+        raise ValueError(f"The action type must be an integer in 0..{skills.N_ACTION_TYPES - 1}, got {action_type!r}")
+    return int(action_type)
 
 
 class DribbleEnv(gym.Env):
@@ -93,6 +109,8 @@ class DribbleEnv(gym.Env):
 
     ``info``: ``distance`` (metres dribbled along +x, frozen at the last step with the ball), ``ball_lost``,
     and ``player_type`` (a :class:`robocup_dribble.player_types.PlayerType` with the type's parameters).
+    :meth:`step` before the first :meth:`reset` raises Gymnasium's ``ResetNeeded``; an invalid action raises
+    ``ValueError`` and changes nothing.
 
     ## Arguments
 
@@ -100,19 +118,21 @@ class DribbleEnv(gym.Env):
     ``render_mode`` (``"human"``, ``"rgb_array"`` or None) and the fields of :class:`DribbleTask` as keywords.
     """
 
-    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}  # noqa: RUF012  (Gymnasium declares it so)
 
-    def __init__(self, profile: str | ServerProfile = "v19", noise: bool = True, render_mode: str | None = None, **task_kwargs: Any) -> None:
-        self.profile, self.task = _configure(profile, noise, render_mode, task_kwargs)
+    def __init__(
+        self, profile: str | ServerProfile = "v19", noise: bool = True, render_mode: str | None = None, **task_kwargs: Any
+    ) -> None:
+        self.profile, self.task = configure(profile, noise, render_mode, task_kwargs)
         self.render_mode = render_mode
         self._lanes = DribbleLanes(1, self.profile, self.task, self.np_random)
         self.action_space = skills.action_space(self.profile)
         self.observation_space = self._lanes.observation_space
         self._lane = np.zeros(1, dtype=np.int64)
-        self._player_type = None
+        self._player_type: Any = None  # None until the first reset
         self._ball_trail: deque = deque(maxlen=TRAIL_LENGTH)
         self._player_trail: deque = deque(maxlen=TRAIL_LENGTH)
-        self._renderer = None
+        self._renderer: Any = None
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
@@ -128,14 +148,20 @@ class DribbleEnv(gym.Env):
         return obs[0], self._info(0.0, False)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if self._player_type is None:
+            raise ResetNeeded("Call reset() before step(): the episode has not started")
         action_type, params = parse_action(action)
-        obs, reward, lost, truncated, distance = self._lanes.step(np.array([action_type]), params[None, :])
+        out = self._lanes.step(np.array([action_type], dtype=np.int64), params[None, :], autoreset=False)
         self._remember_positions()
         if self.render_mode == "human":
             self.render()
-        return obs[0], float(reward[0]), bool(lost[0]), bool(truncated[0]), self._info(float(distance[0]), bool(lost[0]))
+        lost = bool(out.terminated[0])
+        info = self._info(float(out.distances[0]), lost)
+        return out.observations[0], float(out.rewards[0]), lost, bool(out.truncated[0]), info
 
     def render(self) -> np.ndarray | None:
+        if self._player_type is None:
+            raise ResetNeeded("Call reset() before render(): there is no episode to draw yet")
         if self.render_mode is None:
             gym.logger.warn("render() was called without a render_mode; pass render_mode='rgb_array' or 'human' to the env.")
             return None
@@ -143,7 +169,7 @@ class DribbleEnv(gym.Env):
 
         if self._renderer is None:
             self._renderer = DribbleRenderer(self.render_mode, fps=self.metadata["render_fps"])
-        return self._renderer.render(_frame(self._lanes, 0, self._ball_trail, self._player_trail))
+        return self._renderer.render(render_frame(self._lanes, 0, self._ball_trail, self._player_trail))
 
     def close(self) -> None:
         if self._renderer is not None:
@@ -154,12 +180,13 @@ class DribbleEnv(gym.Env):
         return {"distance": distance, "ball_lost": lost, "player_type": self._player_type}
 
     def _remember_positions(self) -> None:
-        s = self._lanes.state[0]
-        self._ball_trail.append((s[physics.B_X], s[physics.B_Y]))
-        self._player_trail.append((s[physics.P_X], s[physics.P_Y]))
+        s = self._lanes.state
+        self._ball_trail.append((s[0, physics.B_X], s[0, physics.B_Y]))
+        self._player_trail.append((s[0, physics.P_X], s[0, physics.P_Y]))
 
 
-def _frame(lanes: DribbleLanes, lane: int, ball_trail: Iterable, player_trail: Iterable):
+def render_frame(lanes: DribbleLanes, lane: int, ball_trail: Iterable, player_trail: Iterable) -> Any:
+    """The :class:`robocup_dribble.render.RenderFrame` of a lane (imports the renderer's module on first use)."""
     from robocup_dribble.render import RenderFrame
 
     s, t = lanes.state[lane], lanes.types[lane]
@@ -168,130 +195,13 @@ def _frame(lanes: DribbleLanes, lane: int, ball_trail: Iterable, player_trail: I
         player_xy=(s[physics.P_X], s[physics.P_Y]),
         body_deg=float(np.degrees(s[physics.P_BODY])),
         player_size=t[physics.T_SIZE],
-        kickable_area=t[physics.T_SIZE] + ball_size + t[physics.T_KICKABLE_MARGIN],
+        kickable_area=physics.kickable_radius(t[physics.T_SIZE], ball_size, t[physics.T_KICKABLE_MARGIN]),
         ball_xy=(s[physics.B_X], s[physics.B_Y]),
         ball_size=ball_size,
         trail=np.array(list(ball_trail), dtype=np.float64).reshape(-1, 2),
         player_trail=np.array(list(player_trail), dtype=np.float64).reshape(-1, 2),
-        caption=f"type {int(lanes.type_ids[lane])} | step {int(lanes.steps[lane])}/{lanes.task.max_actions} | {lanes.distance[lane]:.1f} m",
+        caption=(
+            f"type {int(lanes.type_ids[lane])} | step {int(lanes.steps[lane])}/{lanes.task.max_actions} | "
+            f"{lanes.distance[lane]:.1f} m"
+        ),
     )
-
-
-@contextlib.contextmanager
-def _gc_paused() -> Iterator[None]:
-    """Pause Python's cyclic garbage collector: the objects made meanwhile form no reference cycles."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
-
-
-class DribbleVecEnv(VecEnv):
-    """``n_envs`` dribbling lanes stepped by one compiled call: a Stable-Baselines3 ``VecEnv``.
-
-    Same physics, task and arguments as :class:`DribbleEnv` (one code path: :class:`robocup_dribble.lanes.DribbleLanes`);
-    with ``n_envs=1`` and the same seed it produces the same episodes. Finished lanes reset automatically: their
-    ``infos[i]`` carry ``terminal_observation``, ``TimeLimit.truncated`` and, like SB3's ``VecMonitor``,
-    ``episode = {"r", "l", "t"}``. All lanes draw from one generator seeded by :meth:`seed` (the first seed).
-
-    :meth:`step_packed` takes a batch as two arrays (``(N,)`` action types, ``(N, 7)`` parameters) and skips
-    building N Python tuples; :meth:`step` takes the SB3 form, a sequence of N per-lane Tuple actions.
-    """
-
-    metadata = DribbleEnv.metadata
-
-    def __init__(self, n_envs: int, profile: str | ServerProfile = "v19", noise: bool = True, render_mode: str | None = None, **task_kwargs: Any) -> None:
-        self.profile, self.task = _configure(profile, noise, render_mode, task_kwargs)
-        self._lanes = DribbleLanes(n_envs, self.profile, self.task, seeding.np_random()[0])
-        self.render_mode = render_mode
-        super().__init__(n_envs, self._lanes.observation_space, skills.action_space(self.profile))
-        self._all = np.arange(self.num_envs)
-        self._returns = np.zeros(self.num_envs)
-        self._t_start = time.time()
-        self._player_types: list = [None] * self.num_envs
-        self._actions: Sequence | None = None
-        self._renderer = None
-
-    def reset(self) -> VecEnvObs:
-        if self._seeds[0] is not None:
-            self._lanes.reseed(seeding.np_random(self._seeds[0])[0])
-        self._reset_seeds()
-        self._returns[:] = 0.0
-        return self._start(self._all)
-
-    def step_async(self, actions: Sequence) -> None:
-        self._actions = actions
-
-    def step_wait(self) -> VecEnvStepReturn:
-        if self._actions is None or len(self._actions) != self.num_envs:
-            got = None if self._actions is None else len(self._actions)
-            raise ValueError(f"step() needs one action per lane ({self.num_envs}), got {got}")
-        parsed = [parse_action(action) for action in self._actions]
-        self._actions = None
-        return self.step_packed(np.array([k for k, _ in parsed]), np.stack([p for _, p in parsed]))
-
-    def step_packed(self, action_types: np.ndarray, params: np.ndarray) -> VecEnvStepReturn:
-        """Step all lanes with ``(N,)`` action types and ``(N, 7)`` parameters (``robocup_dribble.skills.PARAM_*``)."""
-        obs, reward, lost, truncated, distance = self._lanes.step(action_types, params)
-        self._returns += reward
-        dones = lost | truncated
-        lost_list, distance_list = lost.tolist(), distance.tolist()
-        finished = np.flatnonzero(dones)
-        # Thousands of fresh dicts and tuples per step would otherwise set off collector passes over every live
-        # object (about a quarter of the step at N=4096); none of them forms a reference cycle.
-        with _gc_paused():
-            infos = [
-                {"distance": d, "ball_lost": b, "player_type": t}
-                for d, b, t in zip(distance_list, lost_list, self._player_types)
-            ]
-            if len(finished):
-                elapsed = round(time.time() - self._t_start, 6)
-                terminal = obs[finished]  # a copy: obs rows are overwritten by the reset below
-                returns = self._returns[finished].tolist()
-                lengths = self._lanes.steps[finished].tolist()
-                timeouts = truncated[finished].tolist()
-                for j, i in enumerate(finished.tolist()):
-                    info = infos[i]
-                    info["terminal_observation"] = terminal[j]
-                    info["TimeLimit.truncated"] = timeouts[j]
-                    info["episode"] = {"r": returns[j], "l": lengths[j], "t": elapsed}
-                self._returns[finished] = 0.0
-                obs[finished] = self._start(finished)
-        return obs, reward.astype(np.float32), dones, infos
-
-    def _start(self, lanes: np.ndarray) -> np.ndarray:
-        obs = self._lanes.reset(lanes)
-        for i in lanes.tolist():
-            self._player_types[i] = self._lanes.player_type(i)
-        return obs
-
-    def get_images(self) -> Sequence[np.ndarray | None]:
-        if self.render_mode != "rgb_array":
-            raise ValueError(f"get_images() needs render_mode='rgb_array', this env has {self.render_mode!r}")
-        from robocup_dribble.render import DribbleRenderer
-
-        if self._renderer is None:
-            self._renderer = DribbleRenderer("rgb_array", fps=self.metadata["render_fps"])
-        return [self._renderer.render(_frame(self._lanes, i, [], [])) for i in range(self.num_envs)]
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
-        return [getattr(self, attr_name)] * len(self._get_indices(indices))
-
-    def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
-        setattr(self, attr_name, value)
-
-    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None, **method_kwargs: Any) -> list[Any]:
-        raise AttributeError(f"DribbleVecEnv has no per-lane sub-environments to call {method_name!r} on")
-
-    def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
-        """Lanes are not wrapped, but they report SB3 ``Monitor``'s episode statistics, so ``Monitor`` answers True
-        (SB3's ``evaluate_policy`` asks this to know whether ``info["episode"]`` is there)."""
-        return [issubclass(wrapper_class, Monitor)] * len(self._get_indices(indices))

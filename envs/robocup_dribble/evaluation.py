@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from robocup_dribble import physics
-from robocup_dribble.env import DribbleVecEnv
+from robocup_dribble.vec_env import DribbleVecEnv
 from robocup_dribble.params import make_profile, without_noise
 from robocup_dribble.player_types import draw_type_table
 
@@ -63,7 +63,7 @@ def evaluate_dribbling(
     :param seed: seed of the evaluation env (player types, starts and noise).
     :param n_lanes: episodes run side by side.
     :param deterministic: passed to ``predict`` (greedy actions by default).
-    :param env_kwargs: further :class:`robocup_dribble.env.DribbleVecEnv` arguments (e.g. ``episodes_per_type_set``).
+    :param env_kwargs: further :class:`robocup_dribble.vec_env.DribbleVecEnv` arguments (e.g. ``episodes_per_type_set``).
     """
     if n_episodes < 1 or n_lanes < 1:
         raise ValueError(f"n_episodes and n_lanes must be >= 1, got {n_episodes} and {n_lanes}")
@@ -86,7 +86,9 @@ def evaluate_dribbling(
     return DribbleReport(np.array(distances), np.array(lost, dtype=bool))
 
 
-def reliability_test(policy: Any, n_players: int = 10_000, profile: str = "v19", seed: int = 0, **kwargs: Any) -> DribbleReport:
+def reliability_test(
+    policy: Any, n_players: int = 10_000, profile: str = "v19", seed: int = 0, **kwargs: Any
+) -> DribbleReport:
     """The paper's reliability test: ``n_players`` freshly generated players each dribble once from the centre.
 
     Every episode draws a new set of player types and plays one type of it (``episodes_per_type_set=1``).
@@ -105,7 +107,8 @@ def running_ceiling(profile: str = "v19", n_players: int = 1000, cycles: int = 3
     state = physics.new_state(len(types))
     physics.recover(state, types, server_profile)
     state[:, physics.B_Y] = 1e3  # the ball is far away
-    commands = np.tile([physics.CMD_DASH, server_profile.server.max_dash_power, 0.0], (len(types), 1))
+    commands = np.zeros((len(types), physics.COMMAND_SIZE))
+    commands[:, physics.C_KIND], commands[:, physics.C_POWER] = physics.CMD_DASH, server_profile.server.max_dash_power
     uniforms = np.full((len(types), physics.N_UNIFORMS), 0.5)
     constants = physics.profile_constants(server_profile)
     for _ in range(cycles):

@@ -1,21 +1,77 @@
 """N independent dribbling lanes: the one code path under both :class:`DribbleEnv` and :class:`DribbleVecEnv`.
 
-A step runs skills -> physics -> task for all lanes at once. Each lane also keeps its heterogeneous player types:
-every ``episodes_per_type_set`` episodes it draws a fresh set with the server's generator rules, and each episode of
-the set uses a different type of it (in random order).
+A step runs skills -> physics -> task for all lanes in one compiled loop and then (if asked) starts the next episode
+of every lane whose episode ended in a second one: no Python object is made per lane. Each lane also keeps its
+heterogeneous player types: every ``episodes_per_type_set`` episodes it draws a fresh set with the server's generator
+rules (:func:`robocup_dribble.player_types.draw_type_set`), and each episode of the set uses a different type of it
+(in random order).
+
+Random draws come from one numpy Generator, through a buffer of its ``random()`` values (so the order is that of
+single draws; values drawn ahead stay in the buffer for the next call and are dropped by :meth:`DribbleLanes.reseed`).
+A step takes ``N_UNIFORMS`` values per lane for the physics (lane after lane); then each lane whose episode ended
+starts the next one (in lane order), taking, if its type set is used up, a new set (:func:`draw_type_set`) and
+``player_types`` values that order it, and then the six values of its start state
+(:func:`robocup_dribble.task.start_lane`). This is random stream version 2; version 1 (before the episode starts
+moved into the compiled loop) drew the type sets from a separately drawn pool.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from robocup_dribble import physics, skills, task
 from robocup_dribble.params import ServerProfile
-from robocup_dribble.player_types import PlayerType, draw_type_table
+from robocup_dribble.player_types import PlayerType, TypeRecipe, draw_type_set, next_uniform, type_recipe
 from robocup_dribble.task import DribbleTask
+
+RANDOM_STREAM_VERSION = 2
+"""Changes whenever the same seed would give other episodes (see the module docstring)."""
+
+
+class LaneArrays(NamedTuple):
+    """Every lane's state, one row per lane (what the compiled loop reads and writes)."""
+
+    state: np.ndarray  # (N, STATE_SIZE) physics state
+    types: np.ndarray  # (N, TYPE_SIZE) the player type of the current episode
+    set_types: np.ndarray  # (N, M, TYPE_SIZE) the types of the lane's set its episodes use, in order (cyclically);
+    # M = min(episodes_per_type_set, player_types): only these are kept, which keeps the lanes' memory small
+    set_ids: np.ndarray  # (N, M) int64: their type ids in the set
+    episodes_in_set: np.ndarray  # (N,) int64: episodes started since the lane's first set
+    type_ids: np.ndarray  # (N,) int64: the current episode's type id in its set
+    steps: np.ndarray  # (N,) int64: actions taken in the current episode
+    start_x: np.ndarray  # (N,) the player's x at the start of the episode
+    distance: np.ndarray  # (N,) metres dribbled along +x (frozen at the last step with the ball)
+    returns: np.ndarray  # (N,) the episode's undiscounted return so far
+
+
+class LaneSettings(NamedTuple):
+    """The constants of the compiled loop."""
+
+    k: np.ndarray  # robocup_dribble.physics.profile_constants
+    c: np.ndarray  # DribbleTask.constants
+    param_low: np.ndarray  # (N_PARAMS,) parameter bounds
+    param_high: np.ndarray
+    obs_low: np.ndarray  # (N_OBSERVATIONS,) observation bounds
+    obs_high: np.ndarray
+    recipe: TypeRecipe
+
+
+class LaneStep(NamedTuple):
+    """One step of every lane; rows of the ``episode_*`` and ``terminal_observations`` arrays are meaningful only
+    where ``terminated | truncated`` (zero elsewhere)."""
+
+    observations: np.ndarray  # (N, 10) float32; the next episode's first one where an ended lane was reset
+    rewards: np.ndarray  # (N,) float64
+    terminated: np.ndarray  # (N,) bool: the ball was lost
+    truncated: np.ndarray  # (N,) bool: max_actions reached with the ball
+    distances: np.ndarray  # (N,) the metres dribbled in the episode so far (before any reset)
+    terminal_observations: np.ndarray  # (N, 10) float32: the episode's last observation, where ended (else zero)
+    episode_returns: np.ndarray  # (N,) float64
+    episode_lengths: np.ndarray  # (N,) int64
 
 
 class DribbleLanes:
@@ -23,81 +79,131 @@ class DribbleLanes:
 
     :param n_lanes: number of lanes.
     :param profile: server profile (noise already decided).
-    :param task: the task's settings.
-    :param rng: the generator every random draw comes from (types, starts, noise), in a fixed order.
+    :param task_settings: the task's settings.
+    :param rng: the generator every random draw comes from (types, starts, noise), in the order the module states.
     """
 
     def __init__(self, n_lanes: int, profile: ServerProfile, task_settings: DribbleTask, rng: np.random.Generator) -> None:
         if isinstance(n_lanes, bool) or not isinstance(n_lanes, (int, np.integer)) or n_lanes < 1:
             raise ValueError(f"n_lanes must be an integer >= 1, got {n_lanes!r}")
-        self.n_lanes = int(n_lanes)
+        self.n_lanes = n = int(n_lanes)
         self.profile = profile
         self.task = task_settings
         self.rng = rng
         self.observation_space = task.observation_space(profile, task_settings)
-        self._bounds = np.stack(skills.parameter_bounds(profile))  # (2, 7): low, high
-        self._obs_bounds = np.stack([self.observation_space.low, self.observation_space.high]).astype(np.float64)
-        self._constants = physics.profile_constants(profile)
-        self._reward_constants = task_settings.constants()
-        n_types = profile.player.player_types
-        self.state = physics.new_state(self.n_lanes)
-        self.types = np.empty((self.n_lanes, physics.TYPE_SIZE))
-        self.type_ids = np.zeros(self.n_lanes, dtype=np.int64)
-        self.type_sets = np.empty((self.n_lanes, n_types, physics.TYPE_SIZE))
-        self.set_order = np.zeros((self.n_lanes, task_settings.episodes_per_type_set), dtype=np.int64)
-        self.episodes_in_set = np.zeros(self.n_lanes, dtype=np.int64)
-        self.steps = np.zeros(self.n_lanes, dtype=np.int64)
-        self.start_x = np.zeros(self.n_lanes)
-        self.distance = np.zeros(self.n_lanes)
-        self._pool_size = min(1024, max(16, self.n_lanes))  # type sets are drawn in blocks: one call per block
-        self._set_pool = np.empty((0, n_types, physics.TYPE_SIZE))
+        low, high = skills.parameter_bounds(profile)
+        self._settings = LaneSettings(
+            physics.profile_constants(profile), task_settings.constants(), low, high,
+            self.observation_space.low.astype(np.float64), self.observation_space.high.astype(np.float64),
+            type_recipe(profile),
+        )  # fmt: skip
+        used_types = min(profile.player.player_types, task_settings.episodes_per_type_set)
+        self.arrays = LaneArrays(
+            state=physics.new_state(n),
+            types=np.zeros((n, physics.TYPE_SIZE)),
+            set_types=np.zeros((n, used_types, physics.TYPE_SIZE)),
+            set_ids=np.zeros((n, used_types), dtype=np.int64),
+            episodes_in_set=np.zeros(n, dtype=np.int64),
+            type_ids=np.zeros(n, dtype=np.int64),
+            steps=np.zeros(n, dtype=np.int64),
+            start_x=np.zeros(n),
+            distance=np.zeros(n),
+            returns=np.zeros(n),
+        )
+        # the arrays by name too (they are updated in place, never replaced)
+        a = self.arrays
+        self.state, self.types, self.set_types, self.set_ids = a.state, a.types, a.set_types, a.set_ids
+        self.episodes_in_set, self.type_ids, self.steps = a.episodes_in_set, a.type_ids, a.steps
+        self.start_x, self.distance, self.returns = a.start_x, a.distance, a.returns
+        g = self._settings
+        self._step_arrays = (a.state, a.types, a.steps, a.start_x, a.distance, a.returns, g.k, g.c, g.param_low,
+                             g.param_high, g.obs_low, g.obs_high)  # the fixed leading arguments of _step_lanes
+        self._uniforms = np.empty(0)  # values drawn from rng and not used yet
+        self._position = np.zeros(1, dtype=np.int64)  # the next one to use
 
     def reseed(self, rng: np.random.Generator) -> None:
         """Draw everything from ``rng`` from now on and start new type sets in every lane."""
         self.rng = rng
-        self.episodes_in_set[:] = 0
-        self._set_pool = self._set_pool[:0]
+        self.arrays.episodes_in_set[:] = 0
+        self._uniforms = np.empty(0)
+        self._position[0] = 0
 
     def reset(self, lanes: np.ndarray) -> np.ndarray:
-        """Start new episodes in ``lanes`` (indices); returns their observations ``(len(lanes), 10)``."""
-        self._next_player_types(lanes)
-        task.start_episodes(self.state, self.types, lanes, self.profile, self.task, self.rng)
-        self.steps[lanes] = 0
-        self.start_x[lanes] = self.state[lanes, physics.P_X]
-        self.distance[lanes] = 0.0
-        obs, _, _ = task.evaluate(
-            self.state[lanes], self.types[lanes], np.zeros((len(lanes), physics.EVENT_SIZE), dtype=np.bool_),
-            self.start_x[lanes], self.start_x[lanes], self.distance[lanes], self._reward_constants,
-            self.profile.server.ball_size, self._obs_bounds[0], self._obs_bounds[1],
-        )
+        """Start new episodes in ``lanes`` (distinct indices in 0..N-1); returns their observations ``(len(lanes), 10)``.
+
+        :raises ValueError: for indices that are not integers in range or repeat; nothing changes.
+        """
+        index = np.asarray(lanes)
+        if index.ndim != 1 or index.dtype.kind not in "iu":
+            raise ValueError(f"lanes must be a 1-D integer array, got {index!r:.200}")
+        index = index.astype(np.int64)
+        if len(index) and (index.min() < 0 or index.max() >= self.n_lanes):
+            raise ValueError(f"lanes must lie in 0..{self.n_lanes - 1}, got {index!r:.200}")
+        if len(np.unique(index)) != len(index):
+            raise ValueError(f"lanes must be distinct, got {index!r:.200}")
+        obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
+        self._start(index, obs, by_row=True)
         return obs
 
-    def step(self, action_types: np.ndarray, params: np.ndarray):
-        """Advance every lane by one action (one server cycle).
+    def step(self, action_types: np.ndarray, params: np.ndarray, autoreset: bool = True) -> LaneStep:
+        """Advance every lane by one action (one server cycle); with ``autoreset`` start the next episode of every
+        lane whose episode ended.
 
         :param action_types: ``(N,)`` integers in 0..3.
         :param params: ``(N, 7)`` finite parameters; out-of-range values are clipped to the bounds.
-        :return: ``obs (N, 10) float32, reward (N,), terminated (N,), truncated (N,), distance (N,)`` (a copy).
         :raises ValueError: for a wrong shape, an action type outside 0..3 or a non-finite parameter; nothing changes.
         """
         kinds, params = self._checked(action_types, params)
         n = self.n_lanes
-        obs = np.empty((n, len(task.OBSERVATION_NAMES)), dtype=np.float32)
-        outcome = np.empty((n, 2))  # reward, distance
-        ends = np.empty((n, 2), dtype=np.bool_)  # terminated (ball lost), truncated
-        uniforms = self.rng.random((n, physics.N_UNIFORMS))
-        _advance(self.state, self.types, kinds, params, self._bounds, uniforms, self._constants, self._reward_constants,
-                 self._obs_bounds, self.start_x, self.distance, self.steps, self.task.max_actions, obs, outcome, ends)
-        return obs, outcome[:, 0], ends[:, 0], ends[:, 1], outcome[:, 1]
+        out = LaneStep(
+            observations=np.empty((n, task.N_OBSERVATIONS), dtype=np.float32),
+            rewards=np.empty(n),
+            terminated=np.empty(n, dtype=np.bool_),
+            truncated=np.empty(n, dtype=np.bool_),
+            distances=np.empty(n),
+            terminal_observations=np.zeros((n, task.N_OBSERVATIONS), dtype=np.float32),
+            episode_returns=np.zeros(n),
+            episode_lengths=np.zeros(n, dtype=np.int64),
+        )
+        physics_uniforms = self._take(n * physics.N_UNIFORMS).reshape(n, physics.N_UNIFORMS)
+        # separate arrays, in LaneStep's order for the outputs: numba unpacks them faster than NamedTuples
+        ended = _step_lanes(*self._step_arrays, kinds, params, physics_uniforms, *out)
+        if autoreset and len(ended):
+            self._start(ended, out.observations, by_row=False)
+        return out
+
+    def _take(self, count: int) -> np.ndarray:
+        """The next ``count`` uniforms of the buffer (drawing more from ``rng`` first if it holds fewer)."""
+        start = int(self._position[0])
+        if len(self._uniforms) - start < count:
+            fresh = self.rng.random(max(count, _DRAW_BLOCK))
+            self._uniforms, start = np.concatenate((self._uniforms[start:], fresh)), 0
+        self._position[0] = start + count
+        return self._uniforms[start : start + count]
+
+    def _start(self, lanes: np.ndarray, obs: np.ndarray, by_row: bool) -> None:
+        """Start the next episode of ``lanes`` (in order); observations to ``obs[row]`` (``by_row``) or ``obs[lane]``."""
+        first = 0
+        while first < len(lanes):
+            first = _start_lanes(self.arrays, self._settings, self.profile.player.player_types, lanes, first, self._uniforms,
+                                 self._position, obs, by_row)
+            if first < len(lanes):  # ran short at lanes[first]: draw more and start it again
+                start = int(self._position[0])
+                self._uniforms = np.concatenate((self._uniforms[start:], self.rng.random(_DRAW_BLOCK)))
+                self._position[0] = 0
 
     def player_type(self, lane: int) -> PlayerType:
         """The player type of a lane's current episode."""
-        return PlayerType(*self.types[lane].tolist())
+        return PlayerType(*self.arrays.types[lane].tolist())
 
     def _checked(self, action_types: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         kinds = np.asarray(action_types)
-        params = np.asarray(params, dtype=np.float64)
+        params = np.asarray(params)
+        if params.dtype.kind not in "iuf":
+            raise ValueError(f"parameters must be real numbers, got an array of {params.dtype}")
+        params = np.ascontiguousarray(params, dtype=np.float64)
         if kinds.dtype == np.int64 and kinds.shape == (self.n_lanes,) and params.shape == (self.n_lanes, skills.N_PARAMS):
+            kinds = np.ascontiguousarray(kinds)
             if _first_invalid(kinds, params) < 0:  # the common case, checked in one compiled call
                 return kinds, params
         if kinds.shape != (self.n_lanes,):
@@ -105,41 +211,18 @@ class DribbleLanes:
         if params.shape != (self.n_lanes, skills.N_PARAMS):
             raise ValueError(f"parameters must have shape ({self.n_lanes}, {skills.N_PARAMS}), got {params.shape}")
         if kinds.dtype.kind not in "iu":
-            as_int = kinds.astype(np.int64) if kinds.dtype.kind in "fb" else None
-            if as_int is None or kinds.dtype.kind == "b" or not np.array_equal(as_int, kinds):
-                raise ValueError(f"action types must be integers in 0..{skills.N_ACTION_TYPES - 1}, got {kinds!r}")
+            as_int = kinds.astype(np.int64) if kinds.dtype.kind == "f" else None
+            if as_int is None or not np.array_equal(as_int, kinds):
+                raise ValueError(f"action types must be integers in 0..{skills.N_ACTION_TYPES - 1}, got {kinds!r:.200}")
             kinds = as_int
-        bad = _first_invalid(kinds.astype(np.int64, copy=False), params)
+        kinds = np.ascontiguousarray(kinds, dtype=np.int64)
+        bad = _first_invalid(kinds, params)
         if bad >= 0:
             raise ValueError(
                 f"lane {bad}: action type {kinds[bad]!r} with parameters {params[bad]!r} is invalid; action types must be "
                 f"integers in 0..{skills.N_ACTION_TYPES - 1} and parameters finite"
             )
-        return kinds.astype(np.int64, copy=False), params
-
-    def _next_player_types(self, lanes: np.ndarray) -> None:
-        """Give each lane the next type of its set, drawing new sets where a set is used up."""
-        per_set = self.task.episodes_per_type_set
-        fresh = lanes[self.episodes_in_set[lanes] % per_set == 0]
-        if len(fresh):
-            self.type_sets[fresh] = self._take_type_sets(len(fresh))
-            n_types = self.type_sets.shape[1]
-            shuffled = np.argsort(self.rng.random((len(fresh), n_types)), axis=1)
-            self.set_order[fresh] = shuffled[:, np.arange(per_set) % n_types]  # distinct while per_set <= n_types
-        self.type_ids[lanes] = self.set_order[lanes, self.episodes_in_set[lanes] % per_set]
-        self.types[lanes] = self.type_sets[lanes, self.type_ids[lanes]]
-        self.episodes_in_set[lanes] += 1
-
-    def _take_type_sets(self, count: int) -> np.ndarray:
-        """The next ``count`` type sets of the pre-drawn pool (refilled from the lanes' generator when short)."""
-        if len(self._set_pool) < count:
-            fresh = draw_type_table(self.profile, max(self._pool_size, count - len(self._set_pool)), self._uniform)
-            self._set_pool = np.concatenate([self._set_pool, fresh])
-        taken, self._set_pool = self._set_pool[:count], self._set_pool[count:]
-        return taken
-
-    def _uniform(self, low: float, high: float, size: int) -> np.ndarray:
-        return low + (high - low) * self.rng.random(size)
+        return kinds, params
 
 
 @njit(cache=True)
@@ -154,27 +237,97 @@ def _first_invalid(kinds: np.ndarray, params: np.ndarray) -> int:
     return -1
 
 
-@njit(cache=True)
-def _advance(state, types, kinds, params, bounds, uniforms, k, reward_constants, obs_bounds, start_x, distance, steps,
-             max_actions, obs, outcome, ends) -> None:
-    """skills -> physics -> task for every lane, in one compiled loop.
+# The kernels unpack the NamedTuples once at the top: reading an array out of a tuple costs a reference-count
+# update, which per lane and field would cost more than the physics.
 
-    Writes ``obs``, ``outcome[:, 0]`` (reward), ``outcome[:, 1]`` (distance), ``ends[:, 0]`` (ball lost) and
-    ``ends[:, 1]`` (truncated); advances ``state``, ``distance`` and ``steps`` in place.
-    """
-    command = np.empty(physics.COMMAND_SIZE)
-    clipped = np.empty(params.shape[1])
-    events = np.empty(physics.EVENT_SIZE, dtype=np.bool_)
-    ball_size = k[physics.K_BALL_SIZE]
+
+_DRAW_BLOCK = 4096  # uniforms drawn from the Generator at least per refill of the buffer
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _start_lane(state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns, k, c,
+                recipe, i: int, uniforms, position, type_set, order_keys) -> bool:
+    """Start lane ``i``'s next episode: its next player type (a fresh set when the set is used up), its start state
+    and its episode statistics. Returns False, committing nothing, if ``uniforms`` ran short (the caller draws more
+    and calls again from the same position). ``type_set`` ``(1, player_types, TYPE_SIZE)`` and ``order_keys``
+    ``(player_types,)`` are scratch. (The lane arrays come one by one: unpacking a tuple of them in a function called
+    per lane would update their reference counts every time, which cost more than the start itself.)"""
+    used_types = set_types.shape[1]
+    episode = episodes_in_set[i] % int(c[task.R_EPISODES_PER_TYPE_SET])
+    if episode == 0:  # a new set, its types in random order; the lane keeps those its episodes use
+        draw_type_set(recipe, uniforms, position, type_set, 0)
+        for j in range(order_keys.shape[0]):
+            order_keys[j] = next_uniform(uniforms, position)
+        order = np.argsort(order_keys)
+        for e in range(used_types):
+            set_ids[i, e] = order[e]
+            for f in range(types.shape[1]):
+                set_types[i, e, f] = type_set[0, order[e], f]
+    e = episode % used_types  # distinct types while episodes_per_type_set <= player_types
+    for f in range(types.shape[1]):
+        types[i, f] = set_types[i, e, f]
+    task.start_lane(state, i, types, i, uniforms, position, c, k)
+    if position[0] > uniforms.shape[0]:
+        return False
+    type_ids[i] = set_ids[i, e]
+    episodes_in_set[i] += 1
+    steps[i] = 0
+    start_x[i] = state[i, physics.P_X]
+    distance[i] = 0.0
+    returns[i] = 0.0
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _start_lanes(a: LaneArrays, g: LaneSettings, player_types: int, lanes, first: int, uniforms, position, obs,
+                 by_row: bool) -> int:
+    """Start ``lanes[first:]`` in order and write their observations; returns the index in ``lanes`` at which the
+    uniforms ran short (that lane is not started), or ``len(lanes)``."""
+    k, c, _, _, obs_low, obs_high, recipe = g
+    state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns = a
+    type_set, order_keys = np.empty((1, player_types, a.types.shape[1])), np.empty(player_types)
+    for row in range(first, lanes.shape[0]):
+        i = lanes[row]
+        start = position[0]
+        if not _start_lane(state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns,
+                           k, c, recipe, i, uniforms, position, type_set, order_keys):
+            position[0] = start
+            return row
+        task.observe(state, i, types, i, obs_low, obs_high, obs, row if by_row else i)
+    return lanes.shape[0]
+
+
+@njit(cache=True, error_model="numpy")
+def _step_lanes(state, types, steps, start_x, distance, returns, k, c, param_low, param_high, obs_low, obs_high,
+                kinds, params, uniforms, obs, rewards, terminated, truncated, distances, terminal_obs, episode_returns,
+                episode_lengths) -> np.ndarray:
+    """skills -> physics -> task for every lane (lane ``i`` uses ``uniforms[i]``); writes the :class:`LaneStep`
+    fields it names and returns the lanes whose episode ended, in order."""
+    ended = np.empty(state.shape[0], dtype=np.int64)
+    n_ended = 0
+    max_actions = c[task.R_MAX_ACTIONS]
     for i in range(state.shape[0]):
-        s, t = state[i], types[i]
-        for j in range(clipped.shape[0]):
-            clipped[j] = min(max(params[i, j], bounds[0, j]), bounds[1, j])
-        skills.command_lane(s, t, kinds[i], clipped, k, command)
-        previous_x = s[physics.P_X]
-        physics.step_lane(s, t, command, uniforms[i], k, events)
-        reward, lost = task.evaluate_lane(s, t, events, previous_x, start_x[i], distance[i:i + 1], reward_constants,
-                                          ball_size, obs_bounds[0], obs_bounds[1], obs[i])
+        kind = kinds[i]
+        first = skills.PARAM_STARTS[kind]
+        p0 = min(max(params[i, first], param_low[first]), param_high[first])
+        p1 = 0.0
+        if skills.PARAM_WIDTHS[kind] > 1:
+            p1 = min(max(params[i, first + 1], param_low[first + 1]), param_high[first + 1])
+        c_kind, power, direction = skills.command(state, i, types, i, kind, p0, p1, k)
+        previous_x = state[i, physics.P_X]
+        collided, _ = physics.cycle(state, i, types, i, c_kind, power, direction, uniforms, i, k)
+        reward, lost = task.evaluate(state, i, types, i, collided, previous_x, c, k)
+        if not lost:
+            distance[i] = state[i, physics.P_X] - start_x[i]
         steps[i] += 1
-        outcome[i, 0], outcome[i, 1] = reward, distance[i]
-        ends[i, 0], ends[i, 1] = lost, steps[i] >= max_actions and not lost
+        returns[i] += reward
+        ended_by_limit = steps[i] >= max_actions and not lost
+        rewards[i], terminated[i], truncated[i], distances[i] = reward, lost, ended_by_limit, distance[i]
+        task.observe(state, i, types, i, obs_low, obs_high, obs, i)
+        if lost or ended_by_limit:
+            episode_returns[i], episode_lengths[i] = returns[i], steps[i]
+            for j in range(obs.shape[1]):
+                terminal_obs[i, j] = obs[i, j]
+            ended[n_ended] = i
+            n_ended += 1
+    return ended[:n_ended]

@@ -24,6 +24,14 @@ from typing import Literal
 EPS = 1e-10  # rcssserver src/utility.h
 
 
+def kickable_radius(player_size: float, ball_size: float, kickable_margin: float) -> float:
+    """Largest centre distance at which a player can kick the ball: player_size + ball_size + kickable_margin (m).
+
+    The one definition; :func:`robocup_dribble.physics.kickable_radius` is this function compiled.
+    """
+    return player_size + ball_size + kickable_margin
+
+
 @dataclass(frozen=True)
 class ServerParams:
     """``server::`` parameters (one value for the whole server; per-type ones are the default type's)."""
@@ -153,7 +161,7 @@ class ServerProfile:
     @property
     def kickable_area(self) -> float:
         """The default type's kickable radius: player_size + ball_size + kickable_margin (m)."""
-        return self.server.player_size + self.server.ball_size + self.server.kickable_margin
+        return kickable_radius(self.server.player_size, self.server.ball_size, self.server.kickable_margin)
 
 
 def _check_choice(name: str, value: str, allowed: tuple[str, ...]) -> None:

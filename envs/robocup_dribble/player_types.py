@@ -20,8 +20,9 @@ from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
-from .params import EPS, ServerProfile, make_profile
+from .params import EPS, ServerProfile, kickable_radius, make_profile
 
 MAX_TRIALS = 1000  # rcssserver HeteroPlayer::HeteroPlayer()
 
@@ -48,7 +49,7 @@ class PlayerType(NamedTuple):
 
     def kickable_area(self, ball_size: float) -> float:
         """Kickable radius: player_size + ball_size + kickable_margin (m)."""
-        return self.player_size + ball_size + self.kickable_margin
+        return kickable_radius(self.player_size, ball_size, self.kickable_margin)
 
     @property
     def terminal_speed(self) -> float:
@@ -127,6 +128,13 @@ class ServerRandom:
 
     __call__ = uniform
 
+    def unread(self, n: int) -> None:
+        """Give back the last ``n`` values of the latest call (at most its size): the next call returns them again."""
+        if not 0 <= n <= self._pos:
+            raise ValueError(f"cannot give back {n} values, {self._pos} are buffered")
+        self._pos -= n
+        self.used -= n
+
 
 def _steps(profile: ServerProfile) -> list:
     """Spec §7.2 steps 1-8 in the server's order: ``((delta min, delta max), [(column, a, b, rule), ...])``.
@@ -165,95 +173,163 @@ def _steps(profile: ServerProfile) -> list:
     ]  # fmt: skip
 
 
-class _Recipe(NamedTuple):
-    lo: np.ndarray  # (n_steps, 1) each step's lower delta bound (its delta when min == max)
-    segments: list  # [(steps, lo, span, checks)]: draw the deltas of steps in one call, then the checks
-    src: np.ndarray  # (F,) the step that sets each column: column = a + delta[src] * b
-    a: np.ndarray  # (F, 1)
-    b: np.ndarray  # (F, 1)
-    window: tuple[float, float] | None  # (max_power, player_speed_max_min - EPS); None: accept every type
+class TypeRecipe(NamedTuple):
+    """Spec §7.2 as arrays for the compiled generator (:func:`type_recipe`; numba takes arrays, not lists).
+
+    Step ``i`` draws ``delta[i] = step_lo[i] + step_span[i] * u`` (no draw when ``step_span[i] == 0``), then checks
+    ``check_a[j] + delta[i] * check_b[j]`` for ``j`` in ``check_start[i] .. check_start[i + 1]``: the trial is rejected
+    unless it is ``> 0`` (``check_strict[j]``) or ``>= 0``. Column ``f`` of an accepted type is
+    ``column_a[f] + delta[column_step[f]] * column_b[f]``. With ``window[0]`` = 1 a type is kept only if its terminal
+    speed lies in (``window[2]``, speed max + EPS) for ``max_power = window[1]`` (step 9).
+    """
+
+    default: np.ndarray  # (F,) type 0
+    step_lo: np.ndarray  # (S,)
+    step_span: np.ndarray
+    check_start: np.ndarray  # (S + 1,) int64
+    check_a: np.ndarray
+    check_b: np.ndarray
+    check_strict: np.ndarray  # bool
+    column_step: np.ndarray  # (F,) int64
+    column_a: np.ndarray
+    column_b: np.ndarray
+    window: np.ndarray  # (3,)
 
 
-def _passes(value, strict: bool):
-    """The rejection rule of spec §7.2: a value must be > 0 (strict) or >= 0; for floats and arrays."""
+def _passes(value: float, strict: bool) -> bool:
+    """The rejection rule of spec §7.2: a value must be > 0 (strict) or >= 0."""
     return value > 0.0 if strict else value >= 0.0
 
 
 @functools.lru_cache(maxsize=16)
-def _recipe(profile: ServerProfile) -> _Recipe:
-    """:func:`_steps` arranged for drawing many sets at once (computed once per profile)."""
+def type_recipe(profile: ServerProfile) -> TypeRecipe:
+    """:func:`_steps` of ``profile`` as a :class:`TypeRecipe` (computed once per profile)."""
     steps = _steps(profile)
     lo = np.array([min(bounds) for bounds, _ in steps])  # the server swaps reversed bounds
     span = np.array([max(bounds) for bounds, _ in steps]) - lo
-    segments, drawn = [], []
+    checks, check_start, columns = [], [0], {}
     for i, (_, terms) in enumerate(steps):
-        if span[i]:
-            drawn.append(i)
-        checks = []
-        for _, a, b, rule in terms:
-            # a + d * b is monotone in d, and a drawn d = lo + span * u lies in [lo, lo + span]: a check that passes
-            # at both ends never rejects and is left out, so the draws up to the next check that can fail are one call.
+        for column, a, b, rule in terms:
+            if column:
+                columns[column] = (i, a, b)
+            # a + d * b is monotone in d, and d lies in [lo, lo + span]: a check that passes at both ends never
+            # rejects, and is left out
             if rule and not all(_passes(a + d * b, rule == ">0") for d in (lo[i], lo[i] + span[i])):
-                checks.append((i, a, b, rule == ">0"))
-        if checks or i == len(steps) - 1:
-            segments.append((np.array(drawn, dtype=np.intp), lo[drawn, None], span[drawn, None], checks))
-            drawn = []
-    columns = {column: (i, a, b) for i, (_, terms) in enumerate(steps) for column, a, b, _ in terms if column}
-    src, a, b = zip(*(columns[name] for name in TYPE_FIELDS))
+                checks.append((a, b, rule == ">0"))
+        check_start.append(len(checks))
+    check_a, check_b, strict = (np.array(values) for values in zip(*checks, strict=True)) if checks else (np.empty(0),) * 3
+    by_field = (columns[name] for name in TYPE_FIELDS)
+    column_step, column_a, column_b = (np.array(values) for values in zip(*by_field, strict=True))
     s = profile.server
-    window = (s.max_power, s.player_speed_max_min - EPS) if profile.hetero_acceptance == "speed_window" else None
-    return _Recipe(lo[:, None], segments, np.array(src), np.array(a)[:, None], np.array(b)[:, None], window)
+    window = np.array([float(profile.hetero_acceptance == "speed_window"), s.max_power, s.player_speed_max_min - EPS])
+    default = np.array(default_player_type(profile), dtype=np.float64)
+    return TypeRecipe(
+        default, lo, span, np.array(check_start, dtype=np.int64), check_a.astype(np.float64), check_b.astype(np.float64),
+        strict.astype(np.bool_), column_step.astype(np.int64), column_a.astype(np.float64), column_b.astype(np.float64),
+        window,
+    )
 
 
-def _trial(r: _Recipe, sets: np.ndarray, uniform: Uniform) -> tuple[np.ndarray, np.ndarray]:
-    """One trial (spec §7.2 steps 1-9) for each of ``sets``: the sets that accepted their type and the types ``(F, n)``.
+@njit(cache=True, error_model="numpy", inline="always")
+def next_uniform(buffer: np.ndarray, position: np.ndarray) -> float:
+    """The value of ``buffer`` at ``position[0]``, which moves on by one; 0.5 once the buffer is used up (the position
+    still moves on, so the caller sees from ``position[0] > buffer.shape[0]`` that it ran short and must redo)."""
+    p = position[0]
+    position[0] = p + 1
+    return buffer[p] if p < buffer.shape[0] else 0.5
 
-    A set rejected by a check draws nothing more in this trial; the draws of one call are laid out step-major,
-    so a single set takes the values from the stream in the server's order.
+
+@njit(cache=True, error_model="numpy")
+def draw_type_set(recipe: TypeRecipe, buffer: np.ndarray, position: np.ndarray, out: np.ndarray, row: int) -> None:
+    """Draw one set of player types into ``out[row]`` (``(player_types, F)``), the server's way (spec §7.2).
+
+    Type 0 is the default type; types 1.. are drawn one after the other, each by up to ``MAX_TRIALS`` trials (a type
+    whose trials all fail stays the default type). The uniforms come from :func:`next_uniform` in the server's
+    order, so with ``buffer`` holding :class:`ServerRandom`'s stream this is the server's set, value for value.
     """
-    delta = np.empty((r.lo.size, sets.size))
-    delta[:] = r.lo  # a step without a draw keeps its one value
-    for steps, lo, span, checks in r.segments:
-        if steps.size and sets.size:
-            delta[steps] = lo + span * uniform(0.0, 1.0, steps.size * sets.size).reshape(steps.size, -1)
-        for step, a, b, strict in checks:
-            ok = _passes(a + delta[step] * b, strict)
-            sets, delta = sets[ok], delta[:, ok]
-    t = r.a + delta[r.src] * r.b  # with b == 1, a + d * 1 is a + d exactly, as the server computes it
-    if r.window is None:
-        return sets, t
-    max_power, v_min = r.window  # step 9
-    v = (max_power * t[_DASH_POWER_RATE] * t[_EFFORT_MAX]) / (1.0 - t[_DECAY])
-    inside = (v_min < v) & (v < t[_SPEED_MAX] + EPS)
-    return sets[inside], t[:, inside]
+    # unpacked once: reading an array out of the tuple inside the loops would update its reference count every time
+    default, lo, span, check_start, check_a, check_b, check_strict, column_step, column_a, column_b, window = recipe
+    n_types, n_fields, n_steps = out.shape[1], out.shape[2], lo.shape[0]
+    delta = np.empty(n_steps)
+    for f in range(n_fields):
+        out[row, 0, f] = default[f]
+    for type_id in range(1, n_types):
+        accepted = False
+        for _ in range(MAX_TRIALS):
+            ok = True
+            for step in range(n_steps):
+                d = lo[step]
+                if span[step] != 0.0:
+                    d = lo[step] + span[step] * next_uniform(buffer, position)
+                delta[step] = d
+                for j in range(check_start[step], check_start[step + 1]):
+                    value = check_a[j] + d * check_b[j]
+                    if not (value > 0.0 if check_strict[j] else value >= 0.0):
+                        ok = False
+                        break
+                if not ok:
+                    break
+            if not ok:
+                continue
+            if window[0] > 0.5:  # step 9: the terminal speed must lie in the acceptance window
+                dpr, eff, dec, spd = _DASH_POWER_RATE, _EFFORT_MAX, _DECAY, _SPEED_MAX
+                dash_power_rate = column_a[dpr] + delta[column_step[dpr]] * column_b[dpr]
+                effort_max = column_a[eff] + delta[column_step[eff]] * column_b[eff]
+                decay = column_a[dec] + delta[column_step[dec]] * column_b[dec]
+                speed_max = column_a[spd] + delta[column_step[spd]] * column_b[spd]
+                v = (window[1] * dash_power_rate * effort_max) / (1.0 - decay)
+                if not (window[2] < v < speed_max + EPS):
+                    continue
+            for f in range(n_fields):  # with b == 1, a + d * 1 is a + d exactly, as the server computes it
+                out[row, type_id, f] = column_a[f] + delta[column_step[f]] * column_b[f]
+            accepted = True
+            break
+        if not accepted:
+            for f in range(n_fields):
+                out[row, type_id, f] = default[f]
+
+
+@njit(cache=True, error_model="numpy")
+def _draw_sets(recipe: TypeRecipe, buffer: np.ndarray, out: np.ndarray, first: int) -> tuple[int, int]:
+    """Draw sets ``first``.. of ``out`` from ``buffer`` until it runs short; returns (sets done, values they used)."""
+    position = np.zeros(1, dtype=np.int64)
+    used = 0
+    for row in range(first, out.shape[0]):
+        draw_type_set(recipe, buffer, position, out, row)
+        if position[0] > buffer.shape[0]:
+            return row, used
+        used = position[0]
+    return out.shape[0], used
+
+
+_BLOCK = 4096  # uniforms fetched from a ``uniform`` callable per call
 
 
 def draw_type_table(profile: str | ServerProfile, n_sets: int, uniform: Uniform) -> np.ndarray:
     """Draw ``n_sets`` independent type tables: ``(n_sets, player_types, len(TYPE_FIELDS))`` float64.
 
-    Row 0 of each set is the default type; types 1.. are drawn one after the other, each trial for all the sets
-    still without that type at once.  ``uniform(lo, hi, n)`` returns ``n`` uniform values in [lo, hi), e.g.
-    ``lambda lo, hi, n: rng.uniform(lo, hi, n)`` for a numpy Generator ``rng``; it is called with (0, 1) and the
-    values are scaled here as the server does, ``lo + (hi - lo) * u``.  With ``n_sets == 1`` and a
-    :class:`ServerRandom` this is the server's stream, value for value; with more sets their values interleave
-    in the stream (each set still follows the server's distribution).
+    Each set is drawn by :func:`draw_type_set`, one after the other, from the values of ``uniform(lo, hi, n)``
+    (``n`` uniform values in [lo, hi), e.g. ``lambda lo, hi, n: rng.uniform(lo, hi, n)`` for a numpy Generator
+    ``rng``), fetched in blocks with (0, 1). Values fetched beyond the last set's needs are given back if
+    ``uniform`` has an ``unread(n)`` method (as :class:`ServerRandom` has), else dropped. With a
+    :class:`ServerRandom` this is the server's stream, value for value.
     """
     prof = make_profile(profile)
-    n_sets = int(n_sets)
-    if n_sets < 0:
-        raise ValueError(f"n_sets must be >= 0, got {n_sets}")
-    recipe = _recipe(prof)
-    table = np.empty((n_sets, prof.player.player_types, len(TYPE_FIELDS)))
-    table[:] = default_player_type(prof)  # and so stays every type whose 1000 trials all failed
-    for type_id in range(1, prof.player.player_types):
-        pending = np.ones(n_sets, dtype=bool)
-        for _ in range(MAX_TRIALS):
-            sets = np.flatnonzero(pending)
-            if not sets.size:
-                break
-            accepted, types = _trial(recipe, sets, uniform)
-            table[accepted, type_id] = types.T
-            pending[accepted] = False
+    if isinstance(n_sets, bool) or not isinstance(n_sets, (int, np.integer)) or n_sets < 0:
+        raise ValueError(f"n_sets must be an integer >= 0, got {n_sets!r}")
+    recipe = type_recipe(prof)
+    table = np.empty((int(n_sets), prof.player.player_types, len(TYPE_FIELDS)))
+    buffer = np.empty(0)
+    done = 0
+    while done < len(table):
+        fetched = np.asarray(uniform(0.0, 1.0, _BLOCK), dtype=np.float64)
+        if fetched.shape != (_BLOCK,) or not ((fetched >= 0.0) & (fetched < 1.0)).all():
+            raise ValueError(f"uniform(0, 1, {_BLOCK}) must return {_BLOCK} values in [0, 1)")
+        buffer = np.concatenate((buffer, fetched))
+        done, used = _draw_sets(recipe, buffer, table, done)
+        buffer = buffer[used:]
+    if len(buffer) and hasattr(uniform, "unread"):
+        uniform.unread(len(buffer))
     return table
 
 

@@ -43,17 +43,23 @@ from numba import njit
 from robocup_dribble import physics
 from robocup_dribble.params import ServerProfile
 
-DASH_MAX, KICK_VELOCITY, KICK_POSITION, KICK_ALIGN = 0, 1, 2, 3
 ACTION_NAMES = ("DASH_MAX", "KICK_VELOCITY", "KICK_POSITION", "KICK_ALIGN")
-N_ACTION_TYPES = 4
+DASH_MAX, KICK_VELOCITY, KICK_POSITION, KICK_ALIGN = (ACTION_NAMES.index(name) for name in ACTION_NAMES)
+N_ACTION_TYPES = len(ACTION_NAMES)
 
-PARAM_DASH_DIRECTION = 0
-PARAM_KICK_SPEED, PARAM_KICK_DIRECTION = 1, 2
-PARAM_POSITION_X, PARAM_POSITION_Y = 3, 4
-PARAM_ALIGN_SPEED, PARAM_ALIGN_OFFSET = 5, 6
-N_PARAMS = 7
-PARAM_NAMES = ("dash_direction", "kick_speed", "kick_direction", "position_x", "position_y", "align_speed", "align_offset")
-PARAM_SLICES = (slice(0, 1), slice(1, 3), slice(3, 5), slice(5, 7))  # the columns of each action type
+ACTION_PARAMS = (
+    ("dash_direction",), ("kick_speed", "kick_direction"), ("position_x", "position_y"), ("align_speed", "align_offset")
+)
+"""The parameter names of each action type, in type order; a batch's ``(N, 7)`` parameters concatenate them."""
+PARAM_NAMES = tuple(name for names in ACTION_PARAMS for name in names)
+PARAM_SIZES = tuple(len(names) for names in ACTION_PARAMS)
+PARAM_SLICES = tuple(slice(PARAM_NAMES.index(names[0]), PARAM_NAMES.index(names[-1]) + 1) for names in ACTION_PARAMS)
+PARAM_DASH_DIRECTION, PARAM_KICK_SPEED, PARAM_KICK_DIRECTION, PARAM_POSITION_X, PARAM_POSITION_Y, PARAM_ALIGN_SPEED, \
+    PARAM_ALIGN_OFFSET = (PARAM_NAMES.index(name) for name in PARAM_NAMES)  # fmt: skip
+N_PARAMS = len(PARAM_NAMES)
+PARAM_STARTS = np.array([s.start for s in PARAM_SLICES], dtype=np.int64)
+"""The column of each action type's first parameter (compiled code reads it)."""
+PARAM_WIDTHS = np.array(PARAM_SIZES, dtype=np.int64)
 
 KICK_POSITION_RANGE = 2.0  # m, |x| and |y| of KICK_POSITION
 ALIGN_OFFSET_RANGE = 1.0  # m, |offset| of KICK_ALIGN
@@ -83,70 +89,54 @@ def as_env_actions(action_types: np.ndarray, params: np.ndarray) -> np.ndarray:
     return actions
 
 
-def commands_for(
-    state: np.ndarray, types: np.ndarray, action_types: np.ndarray, params: np.ndarray, constants: np.ndarray
-) -> np.ndarray:
-    """Turn a batch of (action type, parameters) into one server command per lane.
-
-    :param state: ``(N, STATE_SIZE)`` physics state.
-    :param types: ``(N, TYPE_SIZE)`` player types.
-    :param action_types: ``(N,)`` ints in 0..3 (already validated).
-    :param params: ``(N, 7)`` float64 parameters, already clipped to :func:`parameter_bounds`.
-    :param constants: :func:`robocup_dribble.physics.profile_constants` of the profile.
-    :return: ``(N, COMMAND_SIZE)`` commands for :func:`robocup_dribble.physics.step`.
-    """
-    commands = np.empty((state.shape[0], physics.COMMAND_SIZE), dtype=np.float64)
-    _commands(state, types, action_types, params, constants, commands)
-    return commands
-
-
-@njit(cache=True)
-def _kick_toward(s: np.ndarray, t: np.ndarray, target_vx: float, target_vy: float, k: np.ndarray, command: np.ndarray):
-    """The kick whose result is closest to giving the ball the velocity (target_vx, target_vy)."""
-    ax, ay = target_vx - s[physics.B_VX], target_vy - s[physics.B_VY]
-    rx, ry = s[physics.B_X] - s[physics.P_X], s[physics.B_Y] - s[physics.P_Y]
-    body = s[physics.P_BODY]
+@njit(cache=True, error_model="numpy", inline="always")
+def _kick_toward(state, i, types, ti, target_vx: float, target_vy: float, k: np.ndarray):
+    """The kick command whose result is closest to giving the ball the velocity (target_vx, target_vy)."""
+    ax, ay = target_vx - state[i, physics.B_VX], target_vy - state[i, physics.B_VY]
+    rx, ry = state[i, physics.B_X] - state[i, physics.P_X], state[i, physics.B_Y] - state[i, physics.P_Y]
+    body = state[i, physics.P_BODY]
     dir_diff = abs(physics.normalize_angle(math.atan2(ry, rx) - body))
-    dist_ball = math.hypot(rx, ry) - t[physics.T_SIZE] - k[physics.K_BALL_SIZE]
-    rate = t[physics.T_KICK_POWER_RATE] * (1.0 - 0.25 * dir_diff / math.pi - 0.25 * dist_ball / t[physics.T_KICKABLE_MARGIN])
+    dist_ball = physics.norm(rx, ry) - types[ti, physics.T_SIZE] - k[physics.K_BALL_SIZE]
+    rate = physics.kick_rate(types[ti, physics.T_KICK_POWER_RATE], dir_diff, dist_ball, types[ti, physics.T_KICKABLE_MARGIN])
     max_power = k[physics.K_MAX_POWER]
-    power = min(math.hypot(ax, ay) / rate, max_power) if rate > 0.0 else max_power
-    command[physics.C_KIND] = physics.CMD_KICK
-    command[physics.C_POWER] = power
-    command[physics.C_DIRECTION] = math.degrees(physics.normalize_angle(math.atan2(ay, ax) - body))
+    power = min(physics.norm(ax, ay) / rate, max_power) if rate > 0.0 else max_power
+    return physics.CMD_KICK, power, math.degrees(physics.normalize_angle(math.atan2(ay, ax) - body))
 
 
-@njit(cache=True)
-def _commands(state, types, action_types, params, k, commands) -> None:
-    for i in range(state.shape[0]):
-        command_lane(state[i], types[i], action_types[i], params[i], k, commands[i])
-
-
-@njit(cache=True)
-def command_lane(s: np.ndarray, t: np.ndarray, kind: int, p: np.ndarray, k: np.ndarray, command: np.ndarray) -> None:
-    """The server command of one lane's action (rows of the arrays :func:`commands_for` takes)."""
-    body = s[physics.P_BODY]
-    if kind == DASH_MAX:
-        command[physics.C_KIND] = physics.CMD_DASH
+@njit(cache=True, error_model="numpy", inline="always")
+def command(state, i, types, ti, kind: int, a: float, b: float, k: np.ndarray):
+    """The server command ``(CMD_* kind, power, direction)`` of action type ``kind`` with parameters ``a`` (and ``b``
+    for the two-parameter types), already within :func:`parameter_bounds`, for lane ``i`` (type row ``ti``)."""
+    body = state[i, physics.P_BODY]
+    if kind == DASH_MAX:  # a: direction
         if k[physics.K_DASH_DIRECTION] > 0.5:
-            command[physics.C_POWER] = k[physics.K_MAX_DASH_POWER]
-            command[physics.C_DIRECTION] = p[PARAM_DASH_DIRECTION]
-        else:  # v11: no dash direction; dash with the body-axis share of full power
-            command[physics.C_POWER] = k[physics.K_MAX_DASH_POWER] * math.cos(math.radians(p[PARAM_DASH_DIRECTION]))
-            command[physics.C_DIRECTION] = 0.0
-    elif kind == KICK_VELOCITY:
-        heading = body + math.radians(p[PARAM_KICK_DIRECTION])
-        speed = p[PARAM_KICK_SPEED]
-        _kick_toward(s, t, speed * math.cos(heading), speed * math.sin(heading), k, command)
-    elif kind == KICK_POSITION:  # ball at p_next + R(body)(x, y); the player coasts: p_next = p + v
-        x, y = p[PARAM_POSITION_X], p[PARAM_POSITION_Y]
-        gx = s[physics.P_X] + s[physics.P_VX] + x * math.cos(body) - y * math.sin(body)
-        gy = s[physics.P_Y] + s[physics.P_VY] + x * math.sin(body) + y * math.cos(body)
-        _kick_toward(s, t, gx - s[physics.B_X], gy - s[physics.B_Y], k, command)
-    else:  # KICK_ALIGN: along the body (running) direction, with a lateral offset from the player's next position
-        tx, ty = math.cos(body), math.sin(body)
-        nx, ny = -ty, tx  # the player's right-hand side (+y when facing +x)
-        lateral = (s[physics.B_X] - s[physics.P_X] - s[physics.P_VX]) * nx + (s[physics.B_Y] - s[physics.P_Y] - s[physics.P_VY]) * ny
-        correction = p[PARAM_ALIGN_OFFSET] - lateral
-        speed = p[PARAM_ALIGN_SPEED]
-        _kick_toward(s, t, speed * tx + correction * nx, speed * ty + correction * ny, k, command)
+            return physics.CMD_DASH, k[physics.K_MAX_DASH_POWER], a
+        # v11: no dash direction; dash with the body-axis share of full power
+        return physics.CMD_DASH, k[physics.K_MAX_DASH_POWER] * math.cos(math.radians(a)), 0.0
+    if kind == KICK_VELOCITY:  # a: speed, b: direction
+        heading = body + math.radians(b)
+        return _kick_toward(state, i, types, ti, a * math.cos(heading), a * math.sin(heading), k)
+    px, py = state[i, physics.P_X] + state[i, physics.P_VX], state[i, physics.P_Y] + state[i, physics.P_VY]  # coasting
+    if kind == KICK_POSITION:  # ball at p_next + R(body)(a, b)
+        gx = px + a * math.cos(body) - b * math.sin(body)
+        gy = py + a * math.sin(body) + b * math.cos(body)
+        return _kick_toward(state, i, types, ti, gx - state[i, physics.B_X], gy - state[i, physics.B_Y], k)
+    # KICK_ALIGN: a: speed along the body (running) direction, b: lateral offset from the player's next position
+    tx, ty = math.cos(body), math.sin(body)
+    nx, ny = -ty, tx  # the player's right-hand side (+y when facing +x)
+    lateral = ((state[i, physics.B_X] - state[i, physics.P_X] - state[i, physics.P_VX]) * nx
+               + (state[i, physics.B_Y] - state[i, physics.P_Y] - state[i, physics.P_VY]) * ny)
+    correction = b - lateral
+    return _kick_toward(state, i, types, ti, a * tx + correction * nx, a * ty + correction * ny, k)
+
+
+@njit(cache=True, error_model="numpy")
+def command_lane(s: np.ndarray, t: np.ndarray, kind: int, p: np.ndarray, k: np.ndarray, out: np.ndarray) -> None:
+    """:func:`command` for one lane given as vectors (state row, type row, ``(7,)`` parameters); writes ``out``
+    (``COMMAND_SIZE``)."""
+    first = PARAM_STARTS[kind]
+    b = p[first + 1] if PARAM_WIDTHS[kind] > 1 else 0.0
+    c_kind, power, direction = command(s.reshape((1, physics.STATE_SIZE)), 0, t.reshape((1, physics.TYPE_SIZE)), 0, kind,
+                                       p[first], b, k)
+    out[physics.C_KIND], out[physics.C_POWER], out[physics.C_DIRECTION] = c_kind, power, direction
+

@@ -15,6 +15,10 @@ are all fields of :class:`DribbleTask` (constructor arguments of the envs):
   [0, ``start_player_speed``]; the ball uniform over the ring between ``start_clearance`` outside touching and
   ``start_clearance`` inside the kickable edge, with the player's velocity plus a random one of speed uniform in
   [0, ``start_ball_speed``].
+
+The compiled per-lane functions (:func:`start_lane`, :func:`evaluate`, :func:`observe`) are building blocks for the
+compiled loop of :mod:`robocup_dribble.lanes` and do no checks; Python code starts and steps lanes through
+:class:`robocup_dribble.lanes.DribbleLanes`, which checks its inputs first.
 """
 
 from __future__ import annotations
@@ -29,11 +33,18 @@ from numba import njit
 
 from robocup_dribble import physics
 from robocup_dribble.params import ServerProfile
+from robocup_dribble.player_types import next_uniform
 
 OBSERVATION_NAMES = (
     "player_decay", "dash_power_rate", "kickable_margin", "kick_rand",
     "ball_rel_x", "ball_rel_y", "ball_rel_vx", "ball_rel_vy", "player_vx", "player_vy",
 )
+"""The observation's columns; the ``O_*`` constants are their indices."""
+(
+    O_PLAYER_DECAY, O_DASH_POWER_RATE, O_KICKABLE_MARGIN, O_KICK_RAND,
+    O_BALL_REL_X, O_BALL_REL_Y, O_BALL_REL_VX, O_BALL_REL_VY, O_PLAYER_VX, O_PLAYER_VY,
+) = (OBSERVATION_NAMES.index(name) for name in OBSERVATION_NAMES)  # fmt: skip
+N_OBSERVATIONS = len(OBSERVATION_NAMES)
 
 
 @dataclass(frozen=True)
@@ -80,12 +91,16 @@ class DribbleTask:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
 
     def constants(self) -> np.ndarray:
-        """The reward constants as the vector the compiled kernel reads."""
-        return np.array(
-            [self.progress_weight, self.in_the_way_penalty, self.border_penalty, self.too_close_penalty,
-             self.border_width, self.close_margin],
-            dtype=np.float64,
-        )
+        """The settings as the vector the compiled kernel reads (:data:`TASK_FIELDS` order)."""
+        return np.array([getattr(self, name) for name in TASK_FIELDS], dtype=np.float64)
+
+
+TASK_FIELDS = tuple(field.name for field in dataclasses.fields(DribbleTask))
+"""The layout of :meth:`DribbleTask.constants`: every field, in declaration order."""
+(
+    R_MAX_ACTIONS, R_EPISODES_PER_TYPE_SET, R_PROGRESS_WEIGHT, R_IN_THE_WAY_PENALTY, R_BORDER_PENALTY, R_TOO_CLOSE_PENALTY,
+    R_BORDER_WIDTH, R_CLOSE_MARGIN, R_START_PLAYER_SPEED, R_START_BALL_SPEED, R_START_CLEARANCE,
+) = (TASK_FIELDS.index(name) for name in TASK_FIELDS)  # fmt: skip
 
 
 def observation_space(profile: ServerProfile, task: DribbleTask) -> spaces.Box:
@@ -106,109 +121,101 @@ def observation_space(profile: ServerProfile, task: DribbleTask) -> spaces.Box:
     margin = spread(s.kickable_margin, p.kickable_margin_delta_min, p.kickable_margin_delta_max)
     kick_rand = spread(s.kick_rand, p.kickable_margin_delta_min, p.kickable_margin_delta_max, p.kick_rand_delta_factor)
     kick_rand = (max(0.0, kick_rand[0]), max(0.0, kick_rand[1]))
-    reach = s.player_size + s.ball_size + margin[1] + 0.25
-    ball_speed = max(s.ball_speed_max * (1 + math.sqrt(2) * s.ball_rand) * s.ball_decay, task.start_player_speed + task.start_ball_speed)
+    reach = physics.kickable_radius(s.player_size, s.ball_size, margin[1]) + 0.25
+    ball_speed = max(
+        s.ball_speed_max * (1 + math.sqrt(2) * s.ball_rand) * s.ball_decay, task.start_player_speed + task.start_ball_speed
+    )
     player_speed = max(s.player_speed_max * (1 + math.sqrt(2) * s.player_rand) * decay[1], task.start_player_speed)
-    low = [decay[0], dash_power_rate[0], margin[0], kick_rand[0], -reach, -reach]
-    high = [decay[1], dash_power_rate[1], margin[1], kick_rand[1], reach, reach]
-    low += [-(ball_speed + player_speed)] * 2 + [-player_speed] * 2
-    high += [ball_speed + player_speed] * 2 + [player_speed] * 2
+    relative_speed = ball_speed + player_speed
+    bounds = {
+        "player_decay": decay, "dash_power_rate": dash_power_rate, "kickable_margin": margin, "kick_rand": kick_rand,
+        "ball_rel_x": (-reach, reach), "ball_rel_y": (-reach, reach),
+        "ball_rel_vx": (-relative_speed, relative_speed), "ball_rel_vy": (-relative_speed, relative_speed),
+        "player_vx": (-player_speed, player_speed), "player_vy": (-player_speed, player_speed),
+    }  # fmt: skip
+    low = [bounds[name][0] for name in OBSERVATION_NAMES]
+    high = [bounds[name][1] for name in OBSERVATION_NAMES]
     low_array, high_array = np.array(low), np.array(high)
-    pad = 1e-6 * np.maximum(1.0, np.abs(high_array - low_array))  # float32 rounding must not leave the box
-    return spaces.Box((low_array - pad).astype(np.float32), (high_array + pad).astype(np.float32), dtype=np.float32)
+    with np.errstate(over="ignore", invalid="ignore"):  # too large settings are refused below
+        pad = 1e-6 * np.maximum(1.0, np.abs(high_array - low_array))  # float32 rounding must not leave the box
+        low32, high32 = (low_array - pad).astype(np.float32), (high_array + pad).astype(np.float32)
+    finite = np.isfinite(low32) & np.isfinite(high32)
+    if not finite.all():
+        names = [name for name, ok in zip(OBSERVATION_NAMES, finite, strict=True) if not ok]
+        raise ValueError(
+            f"the settings give observation bounds beyond float32 for {names}; the start speeds and the profile's sizes, "
+            f"speeds and type ranges must stay far below {float(np.finfo(np.float32).max):.3g}"
+        )
+    return spaces.Box(low32, high32, dtype=np.float32)
 
 
-def start_episodes(
-    state: np.ndarray, types: np.ndarray, lanes: np.ndarray, profile: ServerProfile, task: DribbleTask, rng: np.random.Generator
-) -> None:
-    """Place player and ball of the given lanes at the start of an episode (and recover the player's stamina)."""
-    s = profile.server
-    settings = np.array([task.start_player_speed, task.start_ball_speed, task.start_clearance, s.ball_size, s.stamina_max,
-                         s.recover_init, s.stamina_capacity])
-    _start_lanes(state, types, lanes, rng.random((len(lanes), 6)), settings)
-
-
-@njit(cache=True)
-def _start_lanes(state, types, lanes, draws, c) -> None:
-    player_speed, ball_speed, clearance, ball_size = c[0], c[1], c[2], c[3]
-    for row in range(lanes.shape[0]):
-        s, t, u = state[lanes[row]], types[lanes[row]], draws[row]
-        s[:] = 0.0
-        touching = t[physics.T_SIZE] + ball_size
-        inner = touching + clearance
-        outer = max(inner, touching + t[physics.T_KICKABLE_MARGIN] - clearance)
-        radius = math.sqrt(inner**2 + (outer**2 - inner**2) * u[0])  # uniform over the ring's area
-        s[physics.P_VX], s[physics.P_VY] = _polar(player_speed * u[1], u[2])
-        dvx, dvy = _polar(ball_speed * u[3], u[4])
-        s[physics.B_VX], s[physics.B_VY] = s[physics.P_VX] + dvx, s[physics.P_VY] + dvy
-        s[physics.B_X], s[physics.B_Y] = _polar(radius, u[5])
-        s[physics.S_STAMINA], s[physics.S_RECOVERY], s[physics.S_CAPACITY] = c[4], c[5], c[6]  # the server's (recover)
-        s[physics.S_EFFORT] = t[physics.T_EFFORT_MAX]
-
-
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _polar(radius: float, unit_angle: float) -> tuple[float, float]:
+    """The vector of length ``radius`` at the angle ``2 pi unit_angle - pi``."""
     angle = 2.0 * math.pi * unit_angle - math.pi
     return radius * math.cos(angle), radius * math.sin(angle)
 
 
-def evaluate(
-    state: np.ndarray,
-    types: np.ndarray,
-    events: np.ndarray,
-    previous_x: np.ndarray,
-    start_x: np.ndarray,
-    distance: np.ndarray,
-    reward_constants: np.ndarray,
-    ball_size: float,
-    obs_low: np.ndarray,
-    obs_high: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Observation, reward and ball loss of every lane after a physics step; updates ``distance`` in place.
+@njit(cache=True, error_model="numpy", inline="always")
+def start_lane(state, i, types, ti, uniforms, position, c, k) -> None:
+    """Place player and ball of lane ``i`` (type row ``ti``) at the start of an episode and recover the player.
 
-    ``distance`` is the metres dribbled along +x since the start of the episode; on the step that loses the ball it
-    keeps the value of the last step with the ball.
+    Takes six uniforms from ``uniforms`` at ``position`` (:func:`robocup_dribble.player_types.next_uniform`) in this
+    order: the ball's radius (uniform over the ring's area), the player's speed
+    and direction, the ball's extra speed and its direction, the ball's position angle.
 
-    :return: ``obs`` ``(N, 10)`` float32, ``reward`` ``(N,)`` float64, ``ball_lost`` ``(N,)`` bool.
+    :param c: :meth:`DribbleTask.constants`. :param k: :func:`robocup_dribble.physics.profile_constants`.
     """
-    n = state.shape[0]
-    obs = np.empty((n, len(OBSERVATION_NAMES)), dtype=np.float32)
-    reward = np.empty(n, dtype=np.float64)
-    lost = np.empty(n, dtype=np.bool_)
-    _evaluate(state, types, events, previous_x, start_x, distance, reward_constants, ball_size, obs_low, obs_high, obs, reward, lost)
-    return obs, reward, lost
+    for j in range(physics.STATE_SIZE):
+        state[i, j] = 0.0
+    touching = types[ti, physics.T_SIZE] + k[physics.K_BALL_SIZE]
+    clearance = c[R_START_CLEARANCE]
+    inner = touching + clearance
+    outer = max(inner, touching + types[ti, physics.T_KICKABLE_MARGIN] - clearance)
+    radius = math.sqrt(inner**2 + (outer**2 - inner**2) * next_uniform(uniforms, position))
+    player_speed = c[R_START_PLAYER_SPEED] * next_uniform(uniforms, position)
+    pvx, pvy = _polar(player_speed, next_uniform(uniforms, position))
+    ball_speed = c[R_START_BALL_SPEED] * next_uniform(uniforms, position)
+    dvx, dvy = _polar(ball_speed, next_uniform(uniforms, position))
+    state[i, physics.P_VX], state[i, physics.P_VY] = pvx, pvy
+    state[i, physics.B_VX], state[i, physics.B_VY] = pvx + dvx, pvy + dvy
+    state[i, physics.B_X], state[i, physics.B_Y] = _polar(radius, next_uniform(uniforms, position))
+    physics.recover_lane(state, i, types, ti, k)
 
 
-@njit(cache=True)
-def _evaluate(state, types, events, previous_x, start_x, distance, c, ball_size, low, high, obs, reward, lost) -> None:
-    for i in range(state.shape[0]):
-        reward[i], lost[i] = evaluate_lane(state[i], types[i], events[i], previous_x[i], start_x[i], distance[i:i + 1], c,
-                                           ball_size, low, high, obs[i])
+@njit(cache=True, error_model="numpy", inline="always")
+def evaluate(state, i, types, ti, collided: bool, previous_x: float, c, k) -> tuple[float, bool]:
+    """Reward and ball loss of lane ``i`` after a cycle in which the player was at ``previous_x`` before.
 
-
-@njit(cache=True)
-def evaluate_lane(s, t, events, previous_x, start_x, distance, c, ball_size, low, high, obs):
-    """Reward and ball loss of one lane; writes its observation into ``obs`` and its distance into ``distance[0]``."""
-    weight, in_the_way, border, too_close, border_width, close_margin = c[0], c[1], c[2], c[3], c[4], c[5]
-    rx, ry = s[physics.B_X] - s[physics.P_X], s[physics.B_Y] - s[physics.P_Y]
-    gap = math.hypot(rx, ry)
-    touching = t[physics.T_SIZE] + ball_size
-    reach = touching + t[physics.T_KICKABLE_MARGIN]
-    lost = gap > reach
-    if events[physics.E_COLLISION]:
-        reward = in_the_way
-    elif gap > reach - border_width:
-        reward = border
-    elif gap < touching + close_margin:
-        reward = too_close
+    :param collided: a ball-player collision happened in the cycle.
+    """
+    rx, ry = state[i, physics.B_X] - state[i, physics.P_X], state[i, physics.B_Y] - state[i, physics.P_Y]
+    gap = physics.norm(rx, ry)
+    touching = types[ti, physics.T_SIZE] + k[physics.K_BALL_SIZE]
+    reach = physics.kickable_radius(types[ti, physics.T_SIZE], k[physics.K_BALL_SIZE], types[ti, physics.T_KICKABLE_MARGIN])
+    if collided:
+        reward = c[R_IN_THE_WAY_PENALTY]
+    elif gap > reach - c[R_BORDER_WIDTH]:
+        reward = c[R_BORDER_PENALTY]
+    elif gap < touching + c[R_CLOSE_MARGIN]:
+        reward = c[R_TOO_CLOSE_PENALTY]
     else:
-        reward = weight * (s[physics.P_X] - previous_x)
-    if not lost:
-        distance[0] = s[physics.P_X] - start_x
-    values = (
-        t[physics.T_DECAY], t[physics.T_DASH_POWER_RATE], t[physics.T_KICKABLE_MARGIN], t[physics.T_KICK_RAND],
-        rx, ry, s[physics.B_VX] - s[physics.P_VX], s[physics.B_VY] - s[physics.P_VY], s[physics.P_VX], s[physics.P_VY],
-    )
-    for j in range(len(values)):
-        obs[j] = min(max(values[j], low[j]), high[j])
-    return reward, lost
+        reward = c[R_PROGRESS_WEIGHT] * (state[i, physics.P_X] - previous_x)
+    return reward, gap > reach
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def observe(state, i, types, ti, low, high, obs, oi) -> None:
+    """Write lane ``i``'s observation (:data:`OBSERVATION_NAMES`, clipped to [low, high]) into row ``oi`` of ``obs``."""
+    obs[oi, O_PLAYER_DECAY] = min(max(types[ti, physics.T_DECAY], low[O_PLAYER_DECAY]), high[O_PLAYER_DECAY])
+    dpr, margin = O_DASH_POWER_RATE, O_KICKABLE_MARGIN
+    obs[oi, dpr] = min(max(types[ti, physics.T_DASH_POWER_RATE], low[dpr]), high[dpr])
+    obs[oi, margin] = min(max(types[ti, physics.T_KICKABLE_MARGIN], low[margin]), high[margin])
+    obs[oi, O_KICK_RAND] = min(max(types[ti, physics.T_KICK_RAND], low[O_KICK_RAND]), high[O_KICK_RAND])
+    px, py, pvx, pvy = state[i, physics.P_X], state[i, physics.P_Y], state[i, physics.P_VX], state[i, physics.P_VY]
+    obs[oi, O_BALL_REL_X] = min(max(state[i, physics.B_X] - px, low[O_BALL_REL_X]), high[O_BALL_REL_X])
+    obs[oi, O_BALL_REL_Y] = min(max(state[i, physics.B_Y] - py, low[O_BALL_REL_Y]), high[O_BALL_REL_Y])
+    obs[oi, O_BALL_REL_VX] = min(max(state[i, physics.B_VX] - pvx, low[O_BALL_REL_VX]), high[O_BALL_REL_VX])
+    obs[oi, O_BALL_REL_VY] = min(max(state[i, physics.B_VY] - pvy, low[O_BALL_REL_VY]), high[O_BALL_REL_VY])
+    obs[oi, O_PLAYER_VX] = min(max(pvx, low[O_PLAYER_VX]), high[O_PLAYER_VX])
+    obs[oi, O_PLAYER_VY] = min(max(pvy, low[O_PLAYER_VY]), high[O_PLAYER_VY])

@@ -2,9 +2,11 @@
 
 Usage::
 
-    python -m robocup_dribble.validate ../shared/golden/rcss-deterministic.jsonl [MORE.jsonl ...] [--verbose]
+    python -m robocup_dribble.validate [CASES.jsonl ...] [--verbose]
 
-Each line of a file is one recorded case in the format of ``../shared/golden/README.md``: the server options, the
+Without files it replays the rcssserver 19.0.0 recordings shipped in :data:`GOLDEN_DIR` (``robocup_dribble/data/
+golden``, provenance and format in its ``README.md``). Each line of a file is one recorded case in that format: the
+server options, the
 player type, the exact set-up, one command (or none) per cycle and the state the server printed after each cycle.
 The case is replayed from its set-up with a profile built from the recorded ``server::`` options and every printed
 number is compared with a tolerance of ``rtol * |recorded| + atol`` (the server prints 6 significant digits).
@@ -32,6 +34,10 @@ from robocup_dribble import physics
 from robocup_dribble.params import PROFILES, ServerParams, ServerProfile, make_profile
 from robocup_dribble.player_types import PlayerType, default_player_type, generate_player_types, stack_player_types
 
+GOLDEN_DIR = Path(__file__).resolve().parent / "data" / "golden"
+"""The recorded rcssserver 19.0.0 cases shipped with the package (see its README.md)."""
+GOLDEN_FILES = ("rcss-deterministic.jsonl", "rcss-noise.jsonl")
+"""The files replayed when no file is given."""
 RTOL = 1e-5  # the server prints 6 significant digits
 ATOL = 1e-6
 _COMPARED = (
@@ -136,7 +142,8 @@ def simulate_case(
     constants = physics.profile_constants(profile)
     states, events = [], []
     for command in case["commands"]:
-        commands = np.tile(np.array(parse_command(command), dtype=np.float64), (runs, 1))
+        commands = np.zeros((runs, physics.COMMAND_SIZE))
+        commands[:, physics.C_KIND], commands[:, physics.C_POWER], commands[:, physics.C_DIRECTION] = parse_command(command)
         uniforms = np.full((runs, physics.N_UNIFORMS), 0.5) if rng is None else rng.random((runs, physics.N_UNIFORMS))
         events.append(physics.step(state, types, commands, uniforms, constants))
         states.append(state.copy())
@@ -179,7 +186,10 @@ def _options(case: dict) -> dict:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m robocup_dribble.validate", description=__doc__.split("\n\n")[0])
-    parser.add_argument("files", nargs="+", type=Path, help="recorded cases, one JSON object per line (.jsonl)")
+    parser.add_argument(
+        "files", nargs="*", type=Path, default=[GOLDEN_DIR / name for name in GOLDEN_FILES],
+        help="recorded cases, one JSON object per line (.jsonl); default: the shipped rcssserver 19.0.0 recordings",
+    )
     parser.add_argument("--rtol", type=float, default=RTOL, help="relative tolerance (default: %(default)s)")
     parser.add_argument("--atol", type=float, default=ATOL, help="absolute tolerance (default: %(default)s)")
     parser.add_argument("--verbose", action="store_true", help="print passing cases too")
