@@ -150,7 +150,7 @@ def test_errors_on_files(trained: Path, tmp_path: Path, capsys) -> None:
     (tmp_path / "notes.txt").write_text("hello")
     assert "must be a .zip or .aacp" in run_error(capsys, ["evaluate", str(tmp_path / "notes.txt")])
     (tmp_path / "broken.zip").write_bytes(b"PK\x03\x04 not really")
-    assert "cannot load" in run_error(capsys, ["evaluate", str(tmp_path / "broken.zip")])
+    assert "broken.zip is not a usable saved model: it is not a zip archive" in run_error(capsys, ["evaluate", str(tmp_path / "broken.zip")])
     damaged = bytearray((trained / "policy.aacp").read_bytes())
     damaged[100] ^= 1
     (tmp_path / "damaged.aacp").write_bytes(bytes(damaged))
