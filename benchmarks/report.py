@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from benchmarks import cells
 from benchmarks.presets import BASELINES, ENV_IDS, FAMILIES, SARSA_CONFIGS, config_label
 
 BOOTSTRAP_RESAMPLES = 2000
@@ -64,7 +65,8 @@ FAMILY_TITLES = {
 
 
 def load_results(out: Path) -> list[dict[str, Any]]:
-    return [json.loads(p.read_text()) for p in sorted((out / "cells").glob("*.json")) if not p.name.startswith(".")]
+    """The sound cell results (a damaged file is named in a warning and left out; :func:`build_report` lists it)."""
+    return cells.load_cells(out)
 
 
 class Group:
@@ -594,7 +596,15 @@ def run_log(out: Path) -> list[dict[str, Any]]:
     path = out / "runs.jsonl"
     if not path.exists():
         return []
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    runs = []
+    for number, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            runs.append(json.loads(line))
+        except json.JSONDecodeError:
+            print(f"warning: {path} line {number} is damaged (a run killed while appending?); skipped", file=sys.stderr)
+    return runs
 
 
 def setup_section(out: Path, results: list[dict[str, Any]], groups: dict[str, list[Group]], reliability: dict[str, Any] | None) -> list[str]:
@@ -688,12 +698,20 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
     :param figures: False skips drawing the PNGs (the markdown still links them)
     """
     out = Path(out)
-    results = load_results(out)
+    results, damaged = cells.read_cells(out)
+    for message in damaged:
+        print(f"warning: {message}; left out of the report", file=sys.stderr)
     if not results:
-        raise SystemExit(f"No cell files in {out / 'cells'}: run python -m benchmarks.run --out {out} first")
+        raise SystemExit(f"No sound cell files in {out / 'cells'}: run python -m benchmarks.run --out {out} first")
     groups, references = group_results(results)
     reliability_path = out / "reliability.json"
-    reliability = json.loads(reliability_path.read_text()) if reliability_path.exists() else None
+    reliability = None
+    if reliability_path.exists():
+        try:
+            reliability = cells.read_json_object(reliability_path)
+        except ValueError as error:
+            damaged.append(str(error))
+            print(f"warning: {error}; rerun python -m benchmarks.run --reliability --out {out}", file=sys.stderr)
     if figures:
         family_figs = {f: family_figure(out, f, groups, references) for f in FAMILIES}
         best = best_figure(out, groups, references)
@@ -755,6 +773,10 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
             lines += [f"![reliability]({rel_fig})", ""]
     else:
         lines += ["Not run yet: `python -m benchmarks.run --reliability --out DIR`, then regenerate this report.", ""]
+    if damaged:
+        lines += ["## Damaged result files (left out; rerun the runner to recompute them)", ""]
+        lines += [f"- {message}" for message in damaged]
+        lines.append("")
     errors = sorted((out / "errors").glob("*.txt")) if (out / "errors").exists() else []
     if errors:
         lines += ["## Failed cells", ""]
