@@ -277,8 +277,8 @@ def read_policy_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str,
     """
     if not os.path.exists(path):
         path = policy_file_path(path)
-    if os.path.isdir(path):
-        raise _fail(path, "it is a directory")
+    if os.path.exists(path) and not os.path.isfile(path):
+        raise _fail(path, "it is not a regular file (a directory, device or pipe)")
     with open(path, "rb") as f:
         preamble = f.read(PREAMBLE.size)
         if len(preamble) < PREAMBLE.size:

@@ -94,10 +94,10 @@ def check_model_file(path: Any) -> None:
             path.seek(start)
         return
     file = model_zip_path(path)
-    if file.is_dir():
-        raise _fail(file, "it is a directory")
     if not file.exists():
         raise FileNotFoundError(f"{path} does not exist")
+    if not file.is_file():  # a directory, a device (a link to /dev/zero would be read without end), a pipe
+        raise _fail(file, "it is not a regular file")
     _check_source(file, file)
 
 

@@ -185,7 +185,9 @@ class DirectoryPublisher:
     """
 
     def __init__(self, out: str | os.PathLike, what: str):
-        self.out = Path(out)
+        self.out = Path(os.path.abspath(out))
+        if not os.fspath(out) or Path.cwd().is_relative_to(self.out):
+            raise ValueError(f"{what} {os.fspath(out)!r} holds the current directory; give a folder of its own, e.g. runs/name")
         if self.out.exists() and not self.out.is_dir():
             raise ValueError(f"{what} {str(self.out)!r} is an existing file; give a directory")
         try:
@@ -223,7 +225,11 @@ class DirectoryPublisher:
         _fsync_dir(self.staging)
         if not _exchange(self.staging, self.out):
             aside = Path(tempfile.mkdtemp(dir=self.out.parent, prefix=temporary_prefix(self.out)))
-            os.rename(self.out, aside / "old")
+            try:
+                os.rename(self.out, aside / "old")
+            except BaseException:
+                aside.rmdir()
+                raise
             os.rename(self.staging, self.out)
             self.staging = aside
         _fsync_dir(self.out.parent)
