@@ -121,7 +121,14 @@ def written(out: Path) -> Iterator[Path]:
 
 
 def input_file(path: str, suffixes: tuple[str, ...], what: str) -> Path:
-    source = Path(path)
+    try:
+        return _input_file(Path(path), suffixes, what)
+    except (OSError, ValueError) as error:  # a name the system refuses: too long, a NUL byte, a loop of links
+        raise CliError(f"{what} {path!r} cannot be used: {getattr(error, 'strerror', None) or error}") from None
+
+
+def _input_file(source: Path, suffixes: tuple[str, ...], what: str) -> Path:
+    path = str(source)
     if source.is_dir() and (source / "model.zip").is_file() and ".zip" in suffixes:
         return source / "model.zip"  # the --out directory of train
     if not source.exists():
@@ -662,7 +669,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--eval-episodes must be >= 0")
     try:
         args.func(args)
-    except CliError as error:
+    except (CliError, OSError) as error:  # OSError: a file the user named failed in a way no check foresaw
         message = " ".join(str(error).split())  # one line, whatever the error's text holds
         print(f"sb3-aac {args.command}: error: {message}", file=sys.stderr)
         raise SystemExit(2) from None

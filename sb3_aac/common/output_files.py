@@ -65,31 +65,37 @@ def check_writable_file(path: str | os.PathLike, what: str) -> Path:
     :raises ValueError: saying why not
     """
     out = Path(path)
-    if out.is_dir():
-        raise ValueError(f"{what} {str(out)!r} is a directory; give a file name")
     try:
+        if out.is_dir():
+            raise ValueError(f"{what} {str(out)!r} is a directory; give a file name")
         out.parent.mkdir(parents=True, exist_ok=True)
         fd, probe = tempfile.mkstemp(dir=out.parent, prefix=temporary_prefix(out))
         os.close(fd)
         os.unlink(probe)
-    except OSError as error:
-        raise ValueError(f"cannot write {what} {str(out)!r}: {error.strerror or error}") from None
+    except (OSError, ValueError) as error:
+        raise ValueError(_why_not(what, out, error)) from None
     return out
 
 
 def check_writable_dir(path: str | os.PathLike, what: str) -> Path:
     """Like :func:`check_writable_file` for a directory: created if missing, then probed with a temporary file."""
     out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"{what} {str(out)!r} is an existing file; give a directory")
     try:
+        if out.exists() and not out.is_dir():
+            raise ValueError(f"{what} {str(out)!r} is an existing file; give a directory")
         out.mkdir(parents=True, exist_ok=True)
         fd, probe = tempfile.mkstemp(dir=out, prefix=".probe.")
         os.close(fd)
         os.unlink(probe)
-    except OSError as error:
-        raise ValueError(f"cannot write {what} {str(out)!r}: {error.strerror or error}") from None
+    except (OSError, ValueError) as error:
+        raise ValueError(_why_not(what, out, error)) from None
     return out
+
+
+def _why_not(what: str, path: Path, error: Exception) -> str:
+    if isinstance(error, ValueError) and str(error).startswith(what):
+        return str(error)
+    return f"cannot write {what} {str(path)!r}: {getattr(error, 'strerror', None) or error}"
 
 
 def _fsync_dir(folder: Path) -> None:
@@ -188,14 +194,14 @@ class DirectoryPublisher:
         self.out = Path(os.path.abspath(out))
         if not os.fspath(out) or Path.cwd().is_relative_to(self.out):
             raise ValueError(f"{what} {os.fspath(out)!r} holds the current directory; give a folder of its own, e.g. runs/name")
-        if self.out.exists() and not self.out.is_dir():
-            raise ValueError(f"{what} {str(self.out)!r} is an existing file; give a directory")
         try:
+            if self.out.exists() and not self.out.is_dir():
+                raise ValueError(f"{what} {str(self.out)!r} is an existing file; give a directory")
             self.out.parent.mkdir(parents=True, exist_ok=True)
             remove_stale_temporaries(self.out.parent)
             self.staging = Path(tempfile.mkdtemp(dir=self.out.parent, prefix=temporary_prefix(self.out)))
-        except OSError as error:
-            raise ValueError(f"cannot write {what} {str(self.out)!r}: {error.strerror or error}") from None
+        except (OSError, ValueError) as error:  # ValueError: a NUL byte in the name, or the checks above
+            raise ValueError(_why_not(what, self.out, error)) from None
         if self.out.is_dir():
             try:
                 fd, probe = tempfile.mkstemp(dir=self.out, prefix=".probe.")
