@@ -14,8 +14,10 @@ import inspect
 import json
 import math
 import os
+import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -668,7 +670,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "train" and args.eval_episodes < 0:
         parser.error("--eval-episodes must be >= 0")
     try:
-        args.func(args)
+        with terminate_as_interrupt():
+            args.func(args)
     except (CliError, OSError) as error:  # OSError: a file the user named failed in a way no check foresaw
         message = " ".join(str(error).split())  # one line, whatever the error's text holds
         print(f"sb3-aac {args.command}: error: {message}", file=sys.stderr)
@@ -677,6 +680,24 @@ def main(argv: list[str] | None = None) -> int:
         print(f"sb3-aac {args.command}: interrupted", file=sys.stderr)
         raise SystemExit(130) from None
     return 0
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """SIGTERM (``kill``) raises KeyboardInterrupt while a command runs, so its cleanup (temporaries) runs as for
+    Ctrl-C. Only in the main thread, where Python allows signal handlers; the previous handler is restored."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

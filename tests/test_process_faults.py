@@ -170,7 +170,7 @@ def test_killed_trainer_leaves_the_old_set_or_the_new_set(tmp_path: Path) -> Non
     for attempt in range(4):
         trainer = subprocess.Popen([sys.executable, *TRAIN, "--timesteps", "400", "--seed", str(2 + attempt), "--out", str(out)],
                                    env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
-        time.sleep(rng.uniform(0.5, 1.2) * duration)
+        time.sleep(rng.uniform(0.3, 1.1) * duration)
         trainer.send_signal(signal.SIGKILL if attempt % 2 == 0 else signal.SIGTERM)
         trainer.wait(30)
         files = run_files(out)
