@@ -592,6 +592,9 @@ def _unique(results: list[dict[str, Any]], key: str) -> list[Any]:
     return seen
 
 
+RUN_LOG_KEYS = ("wall_s", "workers", "done", "skipped")  # what setup_section reads from each runs.jsonl line
+
+
 def run_log(out: Path) -> list[dict[str, Any]]:
     path = out / "runs.jsonl"
     if not path.exists():
@@ -601,9 +604,13 @@ def run_log(out: Path) -> list[dict[str, Any]]:
         if not line.strip():
             continue
         try:
-            runs.append(json.loads(line))
+            entry = json.loads(line)
         except json.JSONDecodeError:
+            entry = None
+        if not (isinstance(entry, dict) and all(key in entry for key in RUN_LOG_KEYS)):
             print(f"warning: {path} line {number} is damaged (a run killed while appending?); skipped", file=sys.stderr)
+            continue
+        runs.append(entry)
     return runs
 
 
@@ -702,7 +709,8 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
     for message in damaged:
         print(f"warning: {message}; left out of the report", file=sys.stderr)
     if not results:
-        raise SystemExit(f"No sound cell files in {out / 'cells'}: run python -m benchmarks.run --out {out} first")
+        damage = f" ({len(damaged)} damaged: {'; '.join(damaged)})" if damaged else ""
+        raise SystemExit(f"No sound cell files in {out / 'cells'}{damage}: run python -m benchmarks.run --out {out} first")
     groups, references = group_results(results)
     reliability_path = out / "reliability.json"
     reliability = None
