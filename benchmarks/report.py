@@ -699,19 +699,14 @@ def method_section(results: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
-def build_report(out: str | Path, figures: bool = True) -> Path:
-    """Write ``DIR/report.md`` and the figures from ``DIR/cells/*.json`` (and ``DIR/reliability.json`` if present).
-
-    :param figures: False skips drawing the PNGs (the markdown still links them)
-    """
-    out = Path(out)
+def read_inputs(out: Path) -> tuple[list[dict[str, Any]], dict[str, Any] | None, list[str]]:
+    """The sound cell results, the reliability results (None if absent or damaged) and a message per damaged file."""
     results, damaged = cells.read_cells(out)
     for message in damaged:
         print(f"warning: {message}; left out of the report", file=sys.stderr)
     if not results:
         damage = f" ({len(damaged)} damaged: {'; '.join(damaged)})" if damaged else ""
         raise SystemExit(f"No sound cell files in {out / 'cells'}{damage}: run python -m benchmarks.run --out {out} first")
-    groups, references = group_results(results)
     reliability_path = out / "reliability.json"
     reliability = None
     if reliability_path.exists():
@@ -720,6 +715,17 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         except ValueError as error:
             damaged.append(str(error))
             print(f"warning: {error}; rerun python -m benchmarks.run --reliability --out {out}", file=sys.stderr)
+    return results, reliability, damaged
+
+
+def build_report(out: str | Path, figures: bool = True) -> Path:
+    """Write ``DIR/report.md`` and the figures from ``DIR/cells/*.json`` (and ``DIR/reliability.json`` if present).
+
+    :param figures: False skips drawing the PNGs (the markdown still links them)
+    """
+    out = Path(out)
+    results, reliability, damaged = read_inputs(out)
+    groups, references = group_results(results)
     if figures:
         family_figs = {f: family_figure(out, f, groups, references) for f in FAMILIES}
         best = best_figure(out, groups, references)

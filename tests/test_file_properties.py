@@ -154,7 +154,9 @@ SMALL = ["1", "2", "3"]
 
 
 def model_args(files) -> st.SearchStrategy[str]:
-    return st.sampled_from(["dribbler", str(files["model"]), str(files["policy"]), str(files["folder"]), "missing.zip", *HOSTILE])
+    return st.sampled_from(
+        ["dribbler", str(files["model"]), str(files["policy"]), str(files["folder"]), "missing.zip", *HOSTILE]
+    )
 
 
 def command_lines(files) -> st.SearchStrategy[list[str]]:
@@ -181,7 +183,10 @@ def command_lines(files) -> st.SearchStrategy[list[str]]:
             if option == "--help":
                 continue
             if option in ("--out", "--tensorboard"):
-                argv += [option, draw(out_file if command != "train" else st.sampled_from([str(files["folder"] / "run"), *HOSTILE]))]
+                argv += [
+                    option,
+                    draw(out_file if command != "train" else st.sampled_from([str(files["folder"] / "run"), *HOSTILE])),
+                ]
             elif option == "--set":
                 argv += [option, draw(st.sampled_from(["gamma=0.5", "gamma=nan", "gamma=-1", "n_rbf=0", "x=1", "=", "gamma"]))]
             else:

@@ -31,11 +31,11 @@ def read_set(folder: Path) -> dict[str, str]:
 
 @pytest.mark.parametrize("place", ["/proc", "/proc/x/y", "/sys/kernel", "/dev/null"])
 def test_unwritable_places_are_refused_before_any_work(place: str) -> None:
-    with pytest.raises(ValueError, match="cannot write|existing file"):
+    with pytest.raises(ValueError, match=r"cannot write|existing file"):
         DirectoryPublisher(place, "--out directory")
-    with pytest.raises(ValueError, match="cannot write|existing file|directory"):
+    with pytest.raises(ValueError, match=r"cannot write|existing file|directory"):
         check_writable_file(place + "/x.png" if place != "/dev/null" else place + "/x", "--out")
-    with pytest.raises(ValueError, match="cannot write|existing file"):
+    with pytest.raises(ValueError, match=r"cannot write|existing file"):
         check_writable_dir(place + "/tb", "--tensorboard directory")
 
 
@@ -58,13 +58,19 @@ def test_publish_new_and_replace_keeping_other_entries(tmp_path: Path) -> None:
     second = DirectoryPublisher(out, "--out")
     write_set(second.staging, "new")
     second.publish()
-    assert read_set(out) == {"model.zip": "new model.zip", "notes.txt": "mine", "policy.aacp": "new policy.aacp", "run.json": "new run.json"}
+    assert read_set(out) == {
+        "model.zip": "new model.zip",
+        "notes.txt": "mine",
+        "policy.aacp": "new policy.aacp",
+        "run.json": "new run.json",
+    }
     assert (out / "tb" / "events").read_text() == "logged"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]  # no staging or old directory left
 
 
 @pytest.mark.parametrize(
-    ("failing", "exchange"), [("fsync", True), ("link", True), ("exchange", True), ("fsync", False), ("link", False), ("rename", False)]
+    ("failing", "exchange"),
+    [("fsync", True), ("link", True), ("exchange", True), ("fsync", False), ("link", False), ("rename", False)],
 )
 def test_a_failure_at_any_step_leaves_the_old_set(tmp_path: Path, monkeypatch, failing: str, exchange: bool) -> None:
     out = tmp_path / "run"
@@ -81,7 +87,9 @@ def test_a_failure_at_any_step_leaves_the_old_set(tmp_path: Path, monkeypatch, f
 
     if not exchange:
         monkeypatch.setattr(output_files, "_exchange", lambda a, b: False)
-    target = {"fsync": (os, "fsync"), "link": (os, "link"), "exchange": (output_files, "_exchange"), "rename": (os, "rename")}[failing]
+    target = {"fsync": (os, "fsync"), "link": (os, "link"), "exchange": (output_files, "_exchange"), "rename": (os, "rename")}[
+        failing
+    ]
     monkeypatch.setattr(*target, interrupt)
     with pytest.raises(KeyboardInterrupt):
         second.publish()

@@ -136,7 +136,9 @@ def test_a_live_runs_temporaries_and_running_cell_are_left_alone(tmp_path: Path)
             "import sys; from benchmarks.presets import Cell; from benchmarks.run import run_grid; "
             f"print(run_grid([Cell.from_dict({reference.to_dict()!r})], sys.argv[1], workers=1, progress=False)['busy'])"
         )
-        result = subprocess.run([sys.executable, "-c", script, str(tmp_path)], env=ENV, cwd=ROOT, capture_output=True, text=True)
+        result = subprocess.run(
+            [sys.executable, "-c", script, str(tmp_path)], env=ENV, cwd=ROOT, capture_output=True, text=True
+        )
         assert result.returncode == 0, result.stderr
         assert reference.cell_id in result.stdout
     assert live.exists() and not dead.exists()
@@ -161,15 +163,20 @@ def test_killed_trainer_leaves_the_old_set_or_the_new_set(tmp_path: Path) -> Non
 
     out = tmp_path / "run"
     start = time.monotonic()
-    subprocess.run([sys.executable, *TRAIN, "--timesteps", "300", "--seed", "1", "--out", str(out)], env=ENV, check=True, capture_output=True)
+    subprocess.run(
+        [sys.executable, *TRAIN, "--timesteps", "300", "--seed", "1", "--out", str(out)],
+        env=ENV,
+        check=True,
+        capture_output=True,
+    )
     duration = time.monotonic() - start
     (out / "notes.txt").write_text("the user's own file")
     old = run_files(out)
     rng = random.Random(0)
     outcomes = []
     for attempt in range(4):
-        trainer = subprocess.Popen([sys.executable, *TRAIN, "--timesteps", "400", "--seed", str(2 + attempt), "--out", str(out)],
-                                   env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+        argv = [sys.executable, *TRAIN, "--timesteps", "400", "--seed", str(2 + attempt), "--out", str(out)]
+        trainer = subprocess.Popen(argv, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         time.sleep(rng.uniform(0.3, 1.1) * duration)
         trainer.send_signal(signal.SIGKILL if attempt % 2 == 0 else signal.SIGTERM)
         trainer.wait(30)

@@ -193,7 +193,9 @@ class DirectoryPublisher:
     def __init__(self, out: str | os.PathLike, what: str):
         self.out = Path(os.path.abspath(out))
         if not os.fspath(out) or Path.cwd().is_relative_to(self.out):
-            raise ValueError(f"{what} {os.fspath(out)!r} holds the current directory; give a folder of its own, e.g. runs/name")
+            raise ValueError(
+                f"{what} {os.fspath(out)!r} holds the current directory; give a folder of its own, e.g. runs/name"
+            )
         try:
             if self.out.exists() and not self.out.is_dir():
                 raise ValueError(f"{what} {str(self.out)!r} is an existing file; give a directory")
