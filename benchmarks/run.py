@@ -412,13 +412,14 @@ def run_cell_safely(cell_data: dict[str, Any], out: str) -> tuple[str, str, dict
     return cell.cell_id, "done", result
 
 
-def exit_with_parent(poll_seconds: float = PARENT_POLL_SECONDS) -> threading.Thread:
+def exit_with_parent(parent: int, poll_seconds: float = PARENT_POLL_SECONDS) -> threading.Thread:
     """
-    End this process (``os._exit``) as soon as its parent is gone, however the parent ended (``kill -9`` included):
-    a daemon thread polls the parent's process id, which changes when an orphan is adopted. Portable, and unlike
-    Linux's ``PR_SET_PDEATHSIG`` it does not depend on which of the parent's threads started this process.
+    End this process (``os._exit``) as soon as its parent ``parent`` is gone, however it ended (``kill -9``
+    included): a daemon thread polls the parent's process id, which changes when an orphan is adopted. Portable,
+    and unlike Linux's ``PR_SET_PDEATHSIG`` it does not depend on which of the parent's threads started this
+    process. ``parent`` is the id the parent had when it started us: if it died while we were still starting
+    (importing torch takes seconds), we are already adopted and exit at the first poll.
     """
-    parent = os.getppid()
 
     def watch() -> None:
         while os.getppid() == parent:
@@ -430,8 +431,8 @@ def exit_with_parent(poll_seconds: float = PARENT_POLL_SECONDS) -> threading.Thr
     return thread
 
 
-def _init_worker() -> None:
-    exit_with_parent()
+def _init_worker(driver: int) -> None:
+    exit_with_parent(driver)
     th.set_num_threads(1)
 
 
@@ -506,7 +507,7 @@ def run_grid(grid: list[Cell], out: str | Path, workers: int = 2, progress: bool
                 record(*run_cell_safely(cell.to_dict(), str(out)))
         else:
             context = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker) as pool:
+            with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker, initargs=(os.getpid(),)) as pool:
                 pending = {pool.submit(run_cell_safely, cell.to_dict(), str(out)) for cell in todo}
                 try:
                     while pending:

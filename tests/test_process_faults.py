@@ -89,14 +89,14 @@ def check_no_half_written_file(out: Path) -> None:
 def test_killed_runner_leaves_no_process_and_no_half_written_file(tmp_path: Path, seed: int, sig: int) -> None:
     script = DRIVER.format(cells=[c.to_dict() for c in GRID])
     driver = subprocess.Popen([sys.executable, "-c", script, str(tmp_path)], env=ENV, cwd=ROOT, stderr=subprocess.DEVNULL)
-    kill_at = time.monotonic() + random.Random(seed).uniform(3.0, 12.0)
+    kill_at = time.monotonic() + random.Random(seed).uniform(1.0, 12.0)  # from the workers' start-up to their cells
     seen: set[int] = set()
     while time.monotonic() < kill_at and driver.poll() is None:
         seen |= descendants(driver.pid)  # the workers and the resource tracker, as they start
         time.sleep(0.05)
     driver.send_signal(sig)
     driver.wait(30)
-    assert not wait_gone(seen, 10.0), "processes outlived the killed runner"
+    assert not wait_gone(seen, 30.0), "processes outlived the killed runner"  # a worker may still be importing
     check_no_half_written_file(tmp_path)
 
 
