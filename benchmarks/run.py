@@ -548,16 +548,19 @@ def best_cell(results: list[dict[str, Any]], env_id: str, algos: tuple[str, ...]
 
 
 def load_policy(out: Path, result: dict[str, Any]) -> Any:
-    """A trained cell's model, ready for ``evaluate_dribbling`` (baselines through their adapter)."""
+    """A trained cell's model, ready for ``evaluate_dribbling`` (baselines through their adapter); a damaged model
+    file is one ValueError naming it."""
+    from sb3_aac.common.model_files import load_checked
+
     cell = Cell.from_dict(result["cell"])
     path = out / result["model"]
     if cell.algo == "SarsaAAC":
         from sb3_aac import SarsaAAC
 
-        return SarsaAAC.load(path, device="cpu")
+        return load_checked(SarsaAAC, path, device="cpu")
     from benchmarks.adapters import ALGOS, adapter_for
 
-    return adapter_for(ALGOS[cell.algo].load(path, device="cpu"), cell.algo, cell.env_id)
+    return adapter_for(load_checked(ALGOS[cell.algo], path, device="cpu"), cell.algo, cell.env_id)
 
 
 def reliability_entry(policy: Any, profile: str, n_players: int, source: dict[str, Any]) -> dict[str, Any]:

@@ -85,7 +85,7 @@ def check_no_half_written_file(out: Path) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("seed", "sig"), [(0, signal.SIGKILL), (1, signal.SIGTERM), (2, signal.SIGKILL)])
+@pytest.mark.parametrize(("seed", "sig"), [(0, signal.SIGKILL), (1, signal.SIGTERM)])
 def test_killed_runner_leaves_no_process_and_no_half_written_file(tmp_path: Path, seed: int, sig: int) -> None:
     script = DRIVER.format(cells=[c.to_dict() for c in GRID])
     driver = subprocess.Popen([sys.executable, "-c", script, str(tmp_path)], env=ENV, cwd=ROOT, stderr=subprocess.DEVNULL)
@@ -174,7 +174,7 @@ def test_killed_trainer_leaves_the_old_set_or_the_new_set(tmp_path: Path) -> Non
     old = run_files(out)
     rng = random.Random(0)
     outcomes = []
-    for attempt in range(4):
+    for attempt in range(3):
         argv = [sys.executable, *TRAIN, "--timesteps", "400", "--seed", str(2 + attempt), "--out", str(out)]
         trainer = subprocess.Popen(argv, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         time.sleep(rng.uniform(0.3, 1.1) * duration)
