@@ -100,16 +100,17 @@ def test_a_failure_at_any_step_leaves_the_old_set(tmp_path: Path, monkeypatch, f
 
 
 def test_stale_temporaries_of_dead_writers_only_are_removed(tmp_path: Path) -> None:
-    live = tmp_path / f".model.zip.{os.getpid()}.tmpabc"
-    dead = tmp_path / f".model.zip.{DEAD_PID}.tmpabc"
-    dead_dir = tmp_path / f".run.{DEAD_PID}.tmpxyz"
+    live = tmp_path / f".model.zip.sb3aac-{os.getpid()}.tmpabc"
+    dead = tmp_path / f".model.zip.sb3aac-{DEAD_PID}.tmpabc"
+    dead_dir = tmp_path / f".run.sb3aac-{DEAD_PID}.tmpxyz"
     user = tmp_path / ".hidden-but-mine"
-    for path in (live, dead, user):
+    foreign = tmp_path / f".cache.{DEAD_PID}.tmp"  # another program's temporary: never ours to remove
+    for path in (live, dead, user, foreign):
         path.write_text("x")
     dead_dir.mkdir()
     (dead_dir / "model.zip").write_text("x")
     assert sorted(remove_stale_temporaries(tmp_path)) == sorted([dead, dead_dir])
-    assert live.exists() and user.exists() and not dead.exists() and not dead_dir.exists()
+    assert live.exists() and user.exists() and foreign.exists() and not dead.exists() and not dead_dir.exists()
 
 
 def test_replaced_atomically_keeps_the_old_file_on_error(tmp_path: Path) -> None:

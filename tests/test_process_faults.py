@@ -80,7 +80,7 @@ def check_no_half_written_file(out: Path) -> None:
     for path in (out / "cells").glob("*.json"):
         cell_files.read_cell_file(path)  # raises, naming it, if half-written
     leftovers = [p for sub in ("cells", "models", "errors") for p in (out / sub).glob(".*")]
-    owners = {int(match.group(1)) for p in leftovers if (match := re.search(r"\.(\d+)\.tmp", p.name))}
+    owners = {int(match.group(1)) for p in leftovers if (match := re.search(r"\.sb3aac-(\d+)\.tmp", p.name))}
     assert not alive(owners), f"temporaries of live processes: {leftovers}"
 
 
@@ -125,8 +125,8 @@ def test_a_live_runs_temporaries_and_running_cell_are_left_alone(tmp_path: Path)
 
     reference = GRID[0]
     (tmp_path / "cells").mkdir()
-    live = tmp_path / "cells" / f".{reference.cell_id}.json.{os.getpid()}.tmpabc"  # a live process's temporary
-    dead = tmp_path / "cells" / f".{reference.cell_id}.json.{2**22 + 12345}.tmpabc"  # beyond pid_max: dead
+    live = tmp_path / "cells" / f".{reference.cell_id}.json.sb3aac-{os.getpid()}.tmpabc"  # a live process's temporary
+    dead = tmp_path / "cells" / f".{reference.cell_id}.json.sb3aac-{2**22 + 12345}.tmpabc"  # beyond pid_max: dead
     live.write_text("{")
     dead.write_text("{")
     with bench_run.cell_lock(tmp_path, reference.cell_id) as locked:

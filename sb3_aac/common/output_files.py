@@ -3,7 +3,7 @@ Writing outputs so that nothing is half-written: check a place first, replace a 
 directory of files as one set.
 
 Every temporary this module makes is a hidden name beside its target that carries the writer's process id
-(``.<name>.<pid>.tmp...``), so a later run can tell a dead writer's leftovers (removed by
+(``.<name>.sb3aac-<pid>.tmp...``), so a later run can tell a dead writer's leftovers (removed by
 :func:`remove_stale_temporaries`) from a live writer's files (never touched).
 """
 
@@ -19,14 +19,14 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-_TEMPORARY = re.compile(r"^\..+\.(\d+)\.tmp")  # .<name>.<pid>.tmp<random>[suffix]
+_TEMPORARY = re.compile(r"^\..+\.sb3aac-(\d+)\.tmp")  # .<name>.sb3aac-<pid>.tmp<random>[suffix]; nobody else's
 _RENAME_EXCHANGE = 2  # linux/fs.h: swap the two paths atomically (renameat2)
 _AT_FDCWD = -100
 
 
 def temporary_prefix(path: Path) -> str:
     """The prefix of this process's temporaries for ``path``: hidden, with the writer's pid."""
-    return f".{path.name}.{os.getpid()}.tmp"
+    return f".{path.name}.sb3aac-{os.getpid()}.tmp"
 
 
 def pid_alive(pid: int) -> bool:
