@@ -222,7 +222,7 @@ def _check_header(header: Any, path: Any) -> None:
         raise _fail(path, f"the header lacks or mistypes a required field ({error!r})") from error
 
 
-def policy_file_path(path: str | os.PathLike) -> str:
+def policy_file_path(path: str | os.PathLike[str]) -> str:
     """The file :func:`sb3_aac.export_policy` writes for ``path`` and :meth:`RuntimePolicy.load` reads: ``.aacp``
     appended to a name without a suffix (as SB3 appends ``.zip``)."""
     text = os.fspath(path)

@@ -23,7 +23,7 @@ REQUIRED_DATA_KEYS = ("policy_class", "observation_space", "action_space", "num_
 MAX_UNPACKED_BYTES = 1 << 31  # a model of this library is kilobytes to megabytes; refuse zip bombs
 
 
-def model_zip_path(path: str | os.PathLike) -> Path:
+def model_zip_path(path: str | os.PathLike[str]) -> Path:
     """The file SB3's ``load`` opens for ``path``: the path itself, or with ``.zip`` appended when that exists."""
     path = Path(path)
     if not path.exists() and path.suffix != ".zip" and path.with_name(path.name + ".zip").exists():

@@ -57,7 +57,7 @@ def remove_stale_temporaries(folder: Path) -> list[Path]:
     return removed
 
 
-def check_writable_file(path: str | os.PathLike, what: str) -> Path:
+def check_writable_file(path: str | os.PathLike[str], what: str) -> Path:
     """
     Check, before any work, that a file can be written at ``path``: its folder exists or can be created and takes a
     new file (probed by creating and removing a temporary; permission bits alone are not enough, e.g. as root).
@@ -77,7 +77,7 @@ def check_writable_file(path: str | os.PathLike, what: str) -> Path:
     return out
 
 
-def check_writable_dir(path: str | os.PathLike, what: str) -> Path:
+def check_writable_dir(path: str | os.PathLike[str], what: str) -> Path:
     """Like :func:`check_writable_file` for a directory: created if missing, then probed with a temporary file."""
     out = Path(path)
     try:
@@ -108,7 +108,7 @@ def _fsync_dir(folder: Path) -> None:
 
 
 @contextlib.contextmanager
-def replaced_atomically(path: str | os.PathLike, suffix: str = "") -> Iterator[Path]:
+def replaced_atomically(path: str | os.PathLike[str], suffix: str = "") -> Iterator[Path]:
     """
     Yield a temporary file name beside ``path``; when the block ends without error the file is flushed to disk and
     replaces ``path`` in one step (``os.replace``), on error it is removed. Readers see the old file or the whole
@@ -130,12 +130,6 @@ def replaced_atomically(path: str | os.PathLike, suffix: str = "") -> Iterator[P
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
-
-
-def write_bytes_atomically(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` through :func:`replaced_atomically`."""
-    with replaced_atomically(path) as tmp:
-        tmp.write_bytes(data)
 
 
 def _exchange(a: Path, b: Path) -> bool:
@@ -163,7 +157,7 @@ def _link_tree(source: Path, target: Path, skip: set[str]) -> None:
             _link_or_copy(entry, target / entry.name)
 
 
-def _link_or_copy(source: str | os.PathLike, target: str | os.PathLike) -> None:
+def _link_or_copy(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> None:
     if os.path.islink(source):
         os.symlink(os.readlink(source), target)
         return
@@ -190,7 +184,7 @@ class DirectoryPublisher:
         by creating the staging directory and a probe file in ``out``)
     """
 
-    def __init__(self, out: str | os.PathLike, what: str):
+    def __init__(self, out: str | os.PathLike[str], what: str):
         self.out = Path(os.path.abspath(out))
         if not os.fspath(out) or Path.cwd().is_relative_to(self.out):
             raise ValueError(
