@@ -17,6 +17,7 @@ import contextlib
 import json
 import os
 import subprocess
+import sys
 import time
 import uuid
 from collections.abc import Iterator
@@ -155,16 +156,21 @@ def logged_invocation(out: Path, **fields: Any) -> Iterator[dict[str, Any]]:
 def invocations(out: Path) -> list[dict[str, Any]]:
     """Every invocation logged in ``out/runs.jsonl``, in start order: its end record if it has one, else its start
     record with ``status`` ``"killed"`` and ``wall_s`` None. Lines written before start/end records existed (no
-    ``event`` key) are invocations that finished."""
+    ``event`` key) are invocations that finished. A torn line (a writer killed mid-line) is skipped with a warning
+    naming it."""
     path = out / RUN_LOG
     if not path.exists():
         return []
     entries: list[dict[str, Any]] = []
     index: dict[str, int] = {}
-    for line in path.read_text().splitlines():
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
         if not line.strip():
             continue
-        record = json.loads(line)
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            print(f"warning: {path}:{number} is not a JSON record (a torn line?); skipped", file=sys.stderr)
+            continue
         event = record.pop("event", None)
         if event is None:
             entries.append({"status": "finished", **record})

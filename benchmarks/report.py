@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from benchmarks import cells
 from benchmarks.presets import BASELINES, ENV_IDS, FAMILIES, SARSA_CONFIGS, config_label
 from benchmarks.provenance import invocations
 from benchmarks.significance import MIN_SEEDS, compare, target_verdict
@@ -68,7 +69,8 @@ FAMILY_TITLES = {
 
 
 def load_results(out: Path) -> list[dict[str, Any]]:
-    return [json.loads(p.read_text()) for p in sorted((out / "cells").glob("*.json")) if not p.name.startswith(".")]
+    """The sound cell results (a damaged file is named in a warning and left out; :func:`build_report` lists it)."""
+    return cells.load_cells(out)
 
 
 class Group:
@@ -739,18 +741,33 @@ def method_section(results: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
+def read_inputs(out: Path) -> tuple[list[dict[str, Any]], dict[str, Any] | None, list[str]]:
+    """The sound cell results, the reliability results (None if absent or damaged) and a message per damaged file."""
+    results, damaged = cells.read_cells(out)
+    for message in damaged:
+        print(f"warning: {message}; left out of the report", file=sys.stderr)
+    if not results:
+        damage = f" ({len(damaged)} damaged: {'; '.join(damaged)})" if damaged else ""
+        raise SystemExit(f"No sound cell files in {out / 'cells'}{damage}: run python -m benchmarks.run --out {out} first")
+    reliability_path = out / "reliability.json"
+    reliability = None
+    if reliability_path.exists():
+        try:
+            reliability = cells.read_json_object(reliability_path)
+        except ValueError as error:
+            damaged.append(str(error))
+            print(f"warning: {error}; rerun python -m benchmarks.run --reliability --out {out}", file=sys.stderr)
+    return results, reliability, damaged
+
+
 def build_report(out: str | Path, figures: bool = True) -> Path:
     """Write ``DIR/report.md`` and the figures from ``DIR/cells/*.json`` (and ``DIR/reliability.json`` if present).
 
     :param figures: False skips drawing the PNGs (the markdown still links them)
     """
     out = Path(out)
-    results = load_results(out)
-    if not results:
-        raise SystemExit(f"No cell files in {out / 'cells'}: run python -m benchmarks.run --out {out} first")
+    results, reliability, damaged = read_inputs(out)
     groups, references = group_results(results)
-    reliability_path = out / "reliability.json"
-    reliability = json.loads(reliability_path.read_text()) if reliability_path.exists() else None
     if figures:
         family_figs = {f: family_figure(out, f, groups, references) for f in FAMILIES}
         best = best_figure(out, groups, references)
@@ -812,6 +829,10 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
             lines += [f"![reliability]({rel_fig})", ""]
     else:
         lines += ["Not run yet: `python -m benchmarks.run --reliability --out DIR`, then regenerate this report.", ""]
+    if damaged:
+        lines += ["## Damaged result files (left out; rerun the runner to recompute them)", ""]
+        lines += [f"- {message}" for message in damaged]
+        lines.append("")
     errors = sorted((out / "errors").glob("*.txt")) if (out / "errors").exists() else []
     if errors:
         lines += ["## Failed cells", ""]

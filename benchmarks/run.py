@@ -30,17 +30,20 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import fcntl
 import json
 import multiprocessing
 import os
 import platform
 import shlex
 import shutil
+import signal
 import statistics
 import sys
-import tempfile
+import threading
 import time
 import traceback
+import warnings
 from collections.abc import Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
@@ -58,6 +61,7 @@ from stable_baselines3.common.logger import configure  # noqa: E402
 
 import robocup_dribble  # noqa: E402, F401  (registers the env ids)
 from benchmarks.engines import CellEngine, RayEngine  # noqa: E402
+from benchmarks import cells  # noqa: E402
 from benchmarks.presets import (  # noqa: E402
     BASELINES,
     ENV_PROFILE,
@@ -85,7 +89,10 @@ from benchmarks.provenance import (  # noqa: E402
 )
 from robocup_dribble import DribbleVecEnv  # noqa: E402
 from robocup_dribble.evaluation import DribbleReport, evaluate_dribbling, reliability_test, running_ceiling  # noqa: E402
+from sb3_aac.common import output_files  # noqa: E402
+from sb3_aac.common.output_files import replaced_atomically  # noqa: E402
 
+PARENT_POLL_SECONDS = 0.2  # how often a worker checks that the driver still lives
 REACH_METRES = 20.0  # the paper's "at least around 20 meters with high reliability" (§4.1)
 PREDICT_CALLS = 300  # single-observation predict calls timed per cell (the median is reported)
 RELIABILITY_PLAYERS = 10_000
@@ -97,30 +104,10 @@ HIST_MAX_METRES = 60
 # ---------------------------------------------------------------------------------------------------------------------
 
 
-@contextlib.contextmanager
-def replaced_atomically(path: Path, suffix: str = ".tmp") -> Iterator[str]:
-    """Yield a temporary file name beside ``path``; on success it replaces ``path`` in one step, on error it goes.
-
-    Readers see the old file or the whole new one, never a part.
-    """
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=suffix)
-    os.close(fd)
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
-
-
 def atomic_write_text(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` atomically (flushed to disk before the rename)."""
-    with replaced_atomically(path) as tmp, open(tmp, "w") as f:
-        f.write(text)
-        f.flush()
-        os.fsync(f.fileno())
+    with replaced_atomically(path) as tmp:
+        tmp.write_text(text)
 
 
 def atomic_write_json(path: Path, data: Any) -> None:
@@ -129,25 +116,44 @@ def atomic_write_json(path: Path, data: Any) -> None:
 
 
 def save_model_atomic(model: Any, path: Path) -> None:
-    with replaced_atomically(path, suffix=".tmp.zip") as tmp:
+    with replaced_atomically(path, suffix=".zip") as tmp:
         model.save(tmp)
 
 
 def cell_path(out: Path, cell: Cell) -> Path:
-    return out / "cells" / f"{cell.cell_id}.json"
+    return cells.cell_path(out, cell.cell_id)
 
 
 def load_cells(out: Path) -> list[dict[str, Any]]:
-    """The results of every finished cell in ``out/cells`` (temporary files are skipped)."""
-    return [json.loads(p.read_text()) for p in sorted((out / "cells").glob("*.json")) if not p.name.startswith(".")]
+    """The results of every finished cell in ``out/cells`` (temporaries skipped; a damaged file is named and skipped)."""
+    return cells.load_cells(out)
 
 
 def remove_stale_temporaries(out: Path) -> None:
-    """Temporary files a killed process left behind (never a finished cell's file)."""
+    """Temporary files a killed process left behind; a live process's temporaries (a concurrent run) stay."""
     for sub in ("cells", "models", "errors"):
-        for p in (out / sub).glob(".*.tmp*"):
-            with contextlib.suppress(FileNotFoundError):
-                p.unlink()
+        output_files.remove_stale_temporaries(out / sub)
+
+
+@contextlib.contextmanager
+def cell_lock(out: Path, cell_id: str) -> Iterator[bool]:
+    """
+    Hold ``DIR/locks/<cell_id>.lock`` while a cell runs: yields False if another live process holds it (that
+    cell is running elsewhere, so its TensorBoard folder and temporaries must not be touched). The lock is an
+    ``flock``, released by the system when its holder dies, so a killed run never blocks a cell.
+    """
+    lock_dir = out / "locks"
+    lock_dir.mkdir(parents=True, exist_ok=True)
+    with open(lock_dir / f"{cell_id}.lock", "a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            yield False
+            return
+        try:
+            yield True
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -400,22 +406,57 @@ def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
 
 
 def run_cell_safely(cell_data: dict[str, Any], out: str) -> tuple[str, str, dict[str, Any] | str]:
-    """``run_cell``, with an exception turned into ``errors/<cell_id>.txt`` and a ``"failed"`` status."""
+    """``run_cell`` under the cell's lock, with an exception turned into ``errors/<cell_id>.txt`` and a ``"failed"``
+    status; ``"busy"`` if another live process is running the cell."""
     cell = Cell.from_dict(cell_data)
     error_file = Path(out) / "errors" / f"{cell.cell_id}.txt"
-    try:
-        result = run_cell(cell_data, out)
-    except Exception:
-        text = traceback.format_exc()
-        atomic_write_text(error_file, text)
-        return cell.cell_id, "failed", text
-    with contextlib.suppress(FileNotFoundError):
-        error_file.unlink()
+    with cell_lock(Path(out), cell.cell_id) as locked:
+        if not locked:
+            return cell.cell_id, "busy", "running in another process"
+        try:
+            result = run_cell(cell_data, out)
+        except Exception:
+            text = traceback.format_exc()
+            atomic_write_text(error_file, text)
+            return cell.cell_id, "failed", text
+        with contextlib.suppress(FileNotFoundError):
+            error_file.unlink()
     return cell.cell_id, "done", result
 
 
-def _init_worker() -> None:
+def exit_with_parent(parent: int, poll_seconds: float = PARENT_POLL_SECONDS) -> threading.Thread:
+    """
+    End this process (``os._exit``) as soon as its parent ``parent`` is gone, however it ended (``kill -9``
+    included): a daemon thread polls the parent's process id, which changes when an orphan is adopted. Portable,
+    and unlike Linux's ``PR_SET_PDEATHSIG`` it does not depend on which of the parent's threads started this
+    process. ``parent`` is the id the parent had when it started us: if it died while we were still starting
+    (importing torch takes seconds), we are already adopted and exit at the first poll.
+    """
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(poll_seconds)
+        os._exit(1)
+
+    thread = threading.Thread(target=watch, name="exit-with-parent", daemon=True)
+    thread.start()
+    return thread
+
+
+def _init_worker(driver: int) -> None:
+    exit_with_parent(driver)
     th.set_num_threads(1)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and end the running workers now (their cells' temporaries go with them)."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in list((getattr(pool, "_processes", None) or {}).values()):  # no public API before Python 3.14
+        with contextlib.suppress(OSError, ValueError):
+            process.terminate()
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(OSError, ValueError, AssertionError):
+            process.join(5)
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -441,11 +482,15 @@ def _summary_line(result: dict[str, Any]) -> str:
 
 
 def run_grid(
-    cells: list[Cell], out: str | Path, workers: int = 2, progress: bool = True, engine: CellEngine | None = None
+    grid: list[Cell], out: str | Path, workers: int = 2, progress: bool = True, engine: CellEngine | None = None
 ) -> dict[str, list[str]]:
-    """Run the cells that have no result file yet; returns the ids ``done``, ``skipped`` (finished before) and ``failed``.
+    """
+    Run the cells that have no sound result file yet (a damaged one is named in a warning and computed again);
+    returns the ids ``done``, ``skipped`` (finished before), ``failed`` and ``busy`` (running in another process).
 
-    ``engine`` runs them elsewhere (:class:`benchmarks.engines.RayEngine`); None: the local process pool of ``workers``.
+    ``engine`` runs them elsewhere (:class:`benchmarks.engines.RayEngine`); None: the local process pool of ``workers``,
+    whose processes end with this process, however it ends: on an exception or interrupt here they are terminated,
+    and each worker exits by itself when this process is killed (:func:`exit_with_parent`).
     """
     from tqdm import tqdm
 
@@ -453,10 +498,10 @@ def run_grid(
     for sub in ("cells", "models", "tb", "errors"):
         (out / sub).mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)
-    status: dict[str, list[str]] = {"done": [], "skipped": [], "failed": []}
+    status: dict[str, list[str]] = {"done": [], "skipped": [], "failed": [], "busy": []}
     todo = []
-    for cell in cells:
-        (status["skipped"] if cell_path(out, cell).exists() else todo).append(cell)
+    for cell in grid:
+        (status["skipped"] if cells.is_finished(out, cell) else todo).append(cell)
     status["skipped"] = [c.cell_id for c in status["skipped"]]
     todo.sort(key=estimated_cost, reverse=True)
     os.environ.setdefault("SB3_AAC_BENCH_COMMAND", "(called from Python)")
@@ -468,7 +513,7 @@ def run_grid(
         status[state].append(cell_id)
         bar.update(1)
         if progress:
-            text = _summary_line(payload) if state == "done" else "FAILED: " + payload.strip().splitlines()[-1]
+            text = {"done": _summary_line, "busy": str}.get(state, lambda p: "FAILED: " + p.strip().splitlines()[-1])(payload)
             tqdm.write(f"{cell_id}: {text}")
 
     try:
@@ -479,7 +524,7 @@ def run_grid(
                 record(*run_cell_safely(cell.to_dict(), str(out)))
         else:
             context = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker) as pool:
+            with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker, initargs=(os.getpid(),)) as pool:
                 pending = {pool.submit(run_cell_safely, cell.to_dict(), str(out)) for cell in todo}
                 try:
                     while pending:
@@ -487,7 +532,7 @@ def run_grid(
                         for future in finished:
                             record(*future.result())
                 except BaseException:
-                    pool.shutdown(wait=False, cancel_futures=True)
+                    _stop_workers(pool)
                     raise
     finally:
         bar.close()
@@ -520,16 +565,19 @@ def best_cell(results: list[dict[str, Any]], env_id: str, algos: tuple[str, ...]
 
 
 def load_policy(out: Path, result: dict[str, Any]) -> Any:
-    """A trained cell's model, ready for ``evaluate_dribbling`` (baselines through their adapter)."""
+    """A trained cell's model, ready for ``evaluate_dribbling`` (baselines through their adapter); a damaged model
+    file is one ValueError naming it."""
+    from sb3_aac.common.model_files import load_checked
+
     cell = Cell.from_dict(result["cell"])
     path = out / result["model"]
     if cell.algo == "SarsaAAC":
         from sb3_aac import SarsaAAC
 
-        return SarsaAAC.load(path, device="cpu")
+        return load_checked(SarsaAAC, path, device="cpu")
     from benchmarks.adapters import ALGOS, adapter_for
 
-    return adapter_for(ALGOS[cell.algo].load(path, device="cpu"), cell.algo, cell.env_id)
+    return adapter_for(load_checked(ALGOS[cell.algo], path, device="cpu"), cell.algo, cell.env_id)
 
 
 def reliability_entry(policy: Any, profile: str, n_players: int, source: dict[str, Any]) -> dict[str, Any]:
@@ -558,7 +606,11 @@ def run_reliability(out: str | Path, n_players: int = RELIABILITY_PLAYERS, progr
     out = Path(out)
     results = load_cells(out)
     cache_path = out / "reliability.json"
-    cache = json.loads(cache_path.read_text()) if cache_path.exists() else {}
+    try:
+        cache = cells.read_json_object(cache_path) if cache_path.exists() else {}
+    except ValueError as error:
+        warnings.warn(f"{error}; recomputing the reliability test", stacklevel=2)
+        cache = {}
     env_ids = sorted({r["cell"]["env_id"] for r in results if "final" in r})
     data: dict[str, Any] = {"seed": RELIABILITY_SEED, "command": os.environ.get("SB3_AAC_BENCH_COMMAND", ""), "envs": {}}
     for env_id in env_ids:
@@ -594,6 +646,10 @@ def run_reliability(out: str | Path, n_players: int = RELIABILITY_PLAYERS, progr
 # ---------------------------------------------------------------------------------------------------------------------
 
 
+def _exit_on_sigterm(signum: int, frame: Any) -> None:
+    raise SystemExit(128 + signum)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.run", description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", choices=sorted(PRESETS), help="the grid to run")
@@ -607,6 +663,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--address", default=None, help="the Ray cluster to join (default: start Ray here with --workers CPUs)")
     parser.add_argument("--allow-dirty", action="store_true", help="run although tracked files have uncommitted changes (recorded in each cell)")
     args = parser.parse_args(argv)
+    signal.signal(signal.SIGTERM, _exit_on_sigterm)  # `kill` runs the cleanup of run_grid (workers end with us)
     if not args.preset and not args.reliability:
         parser.error("give --preset (run the grid) and/or --reliability")
     if args.address and args.engine != "ray":
@@ -614,10 +671,10 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out or f"runs/bench-{args.preset or 'full'}")
     os.environ["SB3_AAC_BENCH_COMMAND"] = "python -m benchmarks.run " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
     if args.preset:
-        cells = select(build_cells(args.preset), args.only)
+        grid = select(build_cells(args.preset), args.only)
         if args.list:
-            for cell in cells:
-                print(f"{'done' if cell_path(out, cell).exists() else 'todo'}  {cell.cell_id}")
+            for cell in grid:
+                print(f"{'done' if cells.is_finished(out, cell) else 'todo'}  {cell.cell_id}")
             return 0
         start = time.time()
         invocation = new_invocation_id()
@@ -628,7 +685,7 @@ def main(argv: list[str] | None = None) -> int:
                 os.environ[ENV_VAR] = json.dumps(invocation_provenance(invocation, state, args.allow_dirty))
                 engine = RayEngine(args.address, num_cpus=args.workers) if args.engine == "ray" else None
                 try:
-                    status = run_grid(cells, out, args.workers, engine=engine)
+                    status = run_grid(grid, out, args.workers, engine=engine)
                 finally:
                     del os.environ[ENV_VAR]  # later run_grid calls of this process are not this invocation's
                 log.update({k: len(v) for k, v in status.items()})
@@ -638,6 +695,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{len(status['done'])} cells done, {len(status['skipped'])} skipped, {len(status['failed'])} failed in {time.time() - start:.0f} s; results in {out}")
         if status["failed"]:
             print("failed (tracebacks in errors/): " + ", ".join(status["failed"]))
+        if status["busy"]:
+            print("running in another process (not started here): " + ", ".join(status["busy"]))
     if args.reliability:
         run_reliability(out, args.players)
         print(f"reliability test written to {out / 'reliability.json'}")

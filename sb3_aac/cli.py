@@ -9,16 +9,21 @@ from __future__ import annotations
 
 import argparse
 import ast
+import contextlib
 import inspect
 import json
 import math
 import os
+import signal
 import subprocess
 import sys
+import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+
+from sb3_aac.common.output_files import DirectoryPublisher, check_writable_dir, check_writable_file, replaced_atomically
 
 DRIBBLE_IDS = {"RoboCupDribble-v0": "v19", "RoboCupDribblePaper-v0": "v11"}
 PROFILE_ENV_IDS = {profile: env_id for env_id, profile in DRIBBLE_IDS.items()}
@@ -87,32 +92,45 @@ def key_value(text: str) -> tuple[str, Any]:
 
 
 def output_file(path: str, suffixes: tuple[str, ...], what: str) -> Path:
-    """A file to write: the right extension, not a directory, its folder creatable."""
+    """A file to write, checked before any work: the right extension, not a directory, its folder writable."""
     out = Path(path)
     if out.suffix.lower() not in suffixes:
         raise CliError(f"{what} {path!r} must end with {' or '.join(suffixes)}")
     if out.is_dir():
         raise CliError(f"{what} {path!r} is a directory; give a file name ending with {' or '.join(suffixes)}")
     try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise CliError(f"cannot create the folder {str(out.parent)!r} for {what}: {error.strerror}") from None
-    return out
+        return check_writable_file(out, what)
+    except ValueError as error:
+        raise CliError(str(error)) from None
 
 
 def output_dir(path: str, what: str) -> Path:
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise CliError(f"{what} {path!r} is an existing file; give a directory")
+    """A directory to write into, checked before any work (created, then probed with a temporary file)."""
     try:
-        out.mkdir(parents=True, exist_ok=True)
+        return check_writable_dir(path, what)
+    except ValueError as error:
+        raise CliError(str(error)) from None
+
+
+@contextlib.contextmanager
+def written(out: Path) -> Iterator[Path]:
+    """A temporary name (same suffix) that replaces ``out`` in one step once written; a failed write is one line."""
+    try:
+        with replaced_atomically(out, suffix=out.suffix) as tmp:
+            yield tmp
     except OSError as error:
-        raise CliError(f"cannot create {what} {path!r}: {error.strerror}") from None
-    return out
+        raise CliError(f"cannot write {out}: {error.strerror or error}") from None
 
 
 def input_file(path: str, suffixes: tuple[str, ...], what: str) -> Path:
-    source = Path(path)
+    try:
+        return _input_file(Path(path), suffixes, what)
+    except (OSError, ValueError) as error:  # a name the system refuses: too long, a NUL byte, a loop of links
+        raise CliError(f"{what} {path!r} cannot be used: {getattr(error, 'strerror', None) or error}") from None
+
+
+def _input_file(source: Path, suffixes: tuple[str, ...], what: str) -> Path:
+    path = str(source)
     if source.is_dir() and (source / "model.zip").is_file() and ".zip" in suffixes:
         return source / "model.zip"  # the --out directory of train
     if not source.exists():
@@ -230,8 +248,8 @@ def load_policy(model: str, profile: str | None) -> tuple[Any, str]:
 
         try:
             policy = RuntimePolicy.load(path)
-        except ValueError as error:
-            raise CliError(str(error)) from None
+        except (ValueError, OSError) as error:
+            raise CliError(f"cannot load {path}: {error}" if isinstance(error, OSError) else str(error)) from None
         matches = [p for p in PROFILE_ENV_IDS if runtime_matches_profile(policy, p)]
     else:
         policy = load_model(path)
@@ -250,11 +268,15 @@ def load_policy(model: str, profile: str | None) -> tuple[Any, str]:
 
 
 def load_model(path: Path) -> Any:
+    """A SarsaAAC model.zip, checked first (:func:`~sb3_aac.common.model_files.load_checked`): any damage is one line."""
     from sb3_aac import SarsaAAC
+    from sb3_aac.common.model_files import load_checked
 
     try:
-        return SarsaAAC.load(path)
-    except (ValueError, OSError) as error:
+        return load_checked(SarsaAAC, path)
+    except ValueError as error:
+        raise CliError(str(error)) from None
+    except OSError as error:
         raise CliError(f"cannot load {path}: {error}") from None
 
 
@@ -313,7 +335,38 @@ def cmd_train(args: argparse.Namespace) -> None:
     kwargs = hyperparameters(args.set)
     if args.tensorboard is not None:
         output_dir(args.tensorboard, "--tensorboard directory")
-    out = output_dir(args.out, "--out directory") if args.out is not None else None
+    publisher = run_publisher(args.out) if args.out is not None else None
+    try:
+        train_and_publish(args, kwargs, publisher)
+    finally:
+        if publisher is not None:
+            publisher.discard()
+
+
+def run_publisher(out: str) -> DirectoryPublisher:
+    """The ``--out`` directory, checked before training; its files are staged and published as one set."""
+    try:
+        return DirectoryPublisher(out, "--out directory")
+    except ValueError as error:
+        raise CliError(str(error)) from None
+
+
+def save_run(model: Any, publisher: DirectoryPublisher, settings: dict[str, Any]) -> None:
+    """Write model.zip, policy.aacp and run.json into the staging directory, then publish them together."""
+    from sb3_aac import export_policy
+
+    staging = publisher.staging
+    try:
+        model.save(staging / "model.zip")
+        export_policy(model, staging / "policy.aacp", metadata={"env_id": settings["env_id"]})
+        (staging / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
+        out = publisher.publish()
+    except OSError as error:
+        raise CliError(f"cannot write the run to {publisher.out}: {error.strerror or error}") from None
+    print(f"saved {out / 'model.zip'} (SarsaAAC.load), {out / 'policy.aacp'} (RuntimePolicy.load) and {out / 'run.json'}")
+
+
+def train_and_publish(args: argparse.Namespace, kwargs: dict[str, Any], publisher: DirectoryPublisher | None) -> None:
     if args.episodes is not None:
         total_timesteps = args.episodes * max_episode_length(args.env)
         budget = f"{args.episodes} episodes (at most {total_timesteps} steps)"
@@ -349,11 +402,7 @@ def cmd_train(args: argparse.Namespace) -> None:
     seconds = time.perf_counter() - start
     episodes = model._episode_num
     print(f"trained {model.num_timesteps} steps ({episodes} episodes) in {seconds:.1f} s")
-    if out is not None:
-        from sb3_aac import export_policy
-
-        model.save(out / "model.zip")
-        export_policy(model, out / "policy.aacp", metadata={"env_id": args.env})
+    if publisher is not None:
         settings = {
             "env_id": args.env,
             "policy": args.policy,
@@ -363,8 +412,7 @@ def cmd_train(args: argparse.Namespace) -> None:
             "episodes": episodes,
             "hyperparameters": {k: repr(v) for k, v in kwargs.items()},
         }
-        (out / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
-        print(f"saved {out / 'model.zip'} (SarsaAAC.load), {out / 'policy.aacp'} (RuntimePolicy.load) and {out / 'run.json'}")
+        save_run(model, publisher, settings)
     if args.eval_episodes == 0:
         return
     if args.env in DRIBBLE_IDS:
@@ -427,7 +475,8 @@ def cmd_reliability(args: argparse.Namespace) -> None:
     right.grid(alpha=0.3)
     fig.suptitle(f"{Path(args.model).name} on {PROFILE_ENV_IDS[profile]} (as Uc-Cetina 2013, Figs. 9-10)")
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    with written(out) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
     plt.close(fig)
     print(f"wrote {out}")
 
@@ -462,10 +511,11 @@ def cmd_render(args: argparse.Namespace) -> None:
         return
     import imageio.v2 as imageio
 
-    if out.suffix.lower() == ".gif":
-        imageio.mimsave(out, frames, duration=1000 / args.fps, loop=0)
-    else:
-        imageio.mimsave(out, frames, fps=args.fps)
+    with written(out) as tmp:
+        if out.suffix.lower() == ".gif":
+            imageio.mimsave(tmp, frames, duration=1000 / args.fps, loop=0)
+        else:
+            imageio.mimsave(tmp, frames, fps=args.fps)
     print(f"wrote {out} ({len(frames)} frames)")
 
 
@@ -477,7 +527,10 @@ def cmd_export(args: argparse.Namespace) -> None:
     model = load_model(source)
     matches = [p for p in PROFILE_ENV_IDS if model_matches_profile(model, p)]
     metadata = {"env_id": PROFILE_ENV_IDS[matches[0]]} if matches else {}
-    path = export_policy(model, out, metadata=metadata)
+    try:
+        path = export_policy(model, out, metadata=metadata)
+    except OSError as error:
+        raise CliError(f"cannot write {out}: {error.strerror or error}") from None
     policy = RuntimePolicy.load(path)
     print(f"wrote {path} ({path.stat().st_size} bytes): {policy!r}")
     print("load it with: from sb3_aac.runtime import RuntimePolicy; RuntimePolicy.load(path).act(obs)  (numpy only)")
@@ -621,14 +674,34 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "train" and args.eval_episodes < 0:
         parser.error("--eval-episodes must be >= 0")
     try:
-        args.func(args)
-    except CliError as error:
-        print(f"sb3-aac {args.command}: error: {error}", file=sys.stderr)
+        with terminate_as_interrupt():
+            args.func(args)
+    except (CliError, OSError) as error:  # OSError: a file the user named failed in a way no check foresaw
+        message = " ".join(str(error).split())  # one line, whatever the error's text holds
+        print(f"sb3-aac {args.command}: error: {message}", file=sys.stderr)
         raise SystemExit(2) from None
     except KeyboardInterrupt:
         print(f"sb3-aac {args.command}: interrupted", file=sys.stderr)
         raise SystemExit(130) from None
     return 0
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """SIGTERM (``kill``) raises KeyboardInterrupt while a command runs, so its cleanup (temporaries) runs as for
+    Ctrl-C. Only in the main thread, where Python allows signal handlers; the previous handler is restored."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -21,9 +21,18 @@ from typing import Any
 
 import numpy as np
 
-from sb3_aac.runtime import ALIGNMENT, ARRAY_DTYPE, FORMAT_NAME, FORMAT_VERSION, MAGIC, PREAMBLE, expected_array_shapes, read_policy_file
-
-DEFAULT_SUFFIX = ".aacp"
+from sb3_aac.common.output_files import replaced_atomically
+from sb3_aac.runtime import (
+    ALIGNMENT,
+    ARRAY_DTYPE,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    MAGIC,
+    PREAMBLE,
+    expected_array_shapes,
+    policy_file_path,
+    read_policy_file,
+)
 
 
 def _policy_of(model: Any) -> Any:
@@ -123,15 +132,15 @@ def export_policy(model: Any, path: str | os.PathLike, metadata: dict[str, Any] 
     Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy`` v1).
 
     :param model: a :class:`sb3_aac.SarsaAAC` model, or its policy
-    :param path: where to write; ``.aacp`` is appended when the name has no suffix
+    :param path: where to write; ``.aacp`` is appended when the name has no suffix (``RuntimePolicy.load`` accepts
+        the same name)
     :param metadata: JSON-serialisable extras stored in the header (e.g. ``{"env_id": "RoboCupDribble-v0"}``)
-    :return: the path written. The file is written to a temporary name, re-read and checked with
-        :func:`sb3_aac.runtime.read_policy_file`, then renamed into place.
+    :return: the path written. The file is written to a temporary name beside it, re-read and checked with
+        :func:`sb3_aac.runtime.read_policy_file`, flushed to disk, then renamed into place: an interrupted export
+        leaves the earlier file (or none), never a part or a stray temporary.
     """
     policy = _policy_of(model)
-    path = Path(path)
-    if path.suffix == "":
-        path = path.with_suffix(DEFAULT_SUFFIX)
+    path = Path(policy_file_path(path))
     meta = dict(metadata or {})
     num_timesteps = getattr(model, "num_timesteps", None)
     if num_timesteps is not None:
@@ -143,13 +152,7 @@ def export_policy(model: Any, path: str | os.PathLike, metadata: dict[str, Any] 
         data = encode_policy_file(header, arrays)
     except ValueError as error:  # allow_nan=False: a NaN in the metadata
         raise ValueError(f"metadata must be JSON-serialisable without NaN/inf: {error}") from error
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_bytes(data)
-    try:
+    with replaced_atomically(path) as tmp:
+        tmp.write_bytes(data)
         read_policy_file(tmp)
-    except Exception:
-        tmp.unlink()
-        raise
-    os.replace(tmp, path)
     return path

@@ -26,6 +26,7 @@ import hashlib
 import json
 import math
 import os
+import stat
 import struct
 from typing import Any
 
@@ -42,10 +43,23 @@ LAYOUTS = ("nested", "flat", "shared", "oneof")
 BACKENDS = ("auto", "numpy", "numba")  # how act() computes: numba if importable, or numpy only
 PARAM_DTYPES = ("float16", "float32", "float64")
 ARRAY_DTYPE = "<f8"  # every array: little-endian IEEE-754 float64, C order
+DEFAULT_SUFFIX = ".aacp"
+MAX_HEADER_BYTES = 1 << 24  # a header is a few kilobytes; more is not a policy file
+MAX_BLOB_BYTES = 1 << 30  # the arrays of the largest sensible policy are megabytes
+CHECKSUM_MISMATCH = "SHA-256 checksum mismatch: the file is truncated, corrupted or was altered; export it again"
 
 BANK_ARRAYS = ("obs_mid", "obs_half", "rbf_centers", "rbf_widths", "weight", "bias", "weight1", "bias1", "weight2", "bias2")
 
-__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "MAGIC", "BankForward", "RuntimePolicy", "expected_array_shapes", "read_policy_file"]
+__all__ = [
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "MAGIC",
+    "BankForward",
+    "RuntimePolicy",
+    "expected_array_shapes",
+    "policy_file_path",
+    "read_policy_file",
+]
 
 
 class BankForward:
@@ -148,8 +162,13 @@ def _fail(path: Any, why: str) -> ValueError:
     return ValueError(f"{path} is not a usable sb3-aac policy file: {why}")
 
 
+def _count(value: Any) -> bool:
+    """A whole number >= 0 (not a bool, not a float)."""
+    return type(value) is int and value >= 0
+
+
 def _positive_int(value: Any) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool) and value >= 1
+    return _count(value) and value >= 1
 
 
 def _check_header(header: Any, path: Any) -> None:
@@ -162,21 +181,24 @@ def _check_header(header: Any, path: Any) -> None:
         k, start, layout, types = action["n_types"], action["type_start"], action["layout"], action["types"]
         if layout not in LAYOUTS:
             raise _fail(path, f"unknown action layout {layout!r} (known: {list(LAYOUTS)})")
-        if not (_positive_int(k) and isinstance(start, int) and isinstance(types, list) and len(types) == k):
-            raise _fail(path, f"action section declares n_types={k!r} with {len(types)} type entries")
+        if not (_positive_int(k) and type(start) is int and isinstance(types, list) and len(types) == k):
+            raise _fail(path, f"action section: n_types={k!r}, type_start={start!r} must be whole numbers, with n_types types")
         offset = 0
         for j, t in enumerate(types):
             dim, tshape = t["dim"], t["shape"]
-            if not (isinstance(dim, int) and dim >= 0 and isinstance(tshape, list) and math.prod(tshape) == dim):
+            if not (_count(dim) and isinstance(tshape, list) and all(_count(s) for s in tshape) and math.prod(tshape) == dim):
                 raise _fail(path, f"action type {j}: dim {dim!r} and shape {tshape!r} disagree")
-            if t["offset"] != offset:
+            if not _count(t["offset"]) or t["offset"] != offset:
                 raise _fail(path, f"action type {j}: offset {t['offset']!r}, expected {offset}")
             if t["dtype"] not in PARAM_DTYPES:
                 raise _fail(path, f"action type {j}: parameter dtype {t['dtype']!r} is not one of {list(PARAM_DTYPES)}")
             offset += dim
-        if action["n_params"] != offset:
+        if not _count(action["n_params"]) or action["n_params"] != offset:
             raise _fail(path, f"n_params is {action['n_params']!r} but the types' dims add up to {offset}")
         features, head = approx["features"], approx["head"]
+        if not (_positive_int(features["n_features"]) and _positive_int(approx["n_outputs"])):
+            sizes = f"n_features={features['n_features']!r}, n_outputs={approx['n_outputs']!r}"
+            raise _fail(path, f"{sizes}: both must be whole numbers >= 1")
         if features["type"] == "rbf":
             if not _positive_int(features["n_rbf"]) or features["n_features"] != d * features["n_rbf"]:
                 raise _fail(path, f"RBF features: n_rbf={features['n_rbf']!r}, n_features={features['n_features']!r}, {d} inputs")
@@ -200,30 +222,34 @@ def _check_header(header: Any, path: Any) -> None:
         raise _fail(path, f"the header lacks or mistypes a required field ({error!r})") from error
 
 
-def read_policy_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """
-    Read and verify a policy file.
+def policy_file_path(path: str | os.PathLike[str]) -> str:
+    """The file :func:`sb3_aac.export_policy` writes for ``path`` and :meth:`RuntimePolicy.load` reads: ``.aacp``
+    appended to a name without a suffix (as SB3 appends ``.zip``)."""
+    text = os.fspath(path)
+    base = os.path.basename(text)
+    return text + DEFAULT_SUFFIX if base and os.path.splitext(base)[1] == "" else text
 
-    :return: the JSON header and the arrays (read-only float64 views of one buffer)
-    :raises ValueError: for a file that is not a complete, unaltered version-1 policy file
-    :raises FileNotFoundError: if there is no such file
-    """
-    with open(path, "rb") as f:
-        data = f.read()
-    if len(data) < PREAMBLE.size + DIGEST_SIZE:
-        raise _fail(path, f"only {len(data)} bytes (truncated?)")
-    magic, header_len = PREAMBLE.unpack_from(data)
-    if magic != MAGIC:
-        raise _fail(path, f"it does not start with the magic bytes {MAGIC!r} (got {magic!r}); export one with sb3_aac.export_policy")
-    if hashlib.sha256(data[:-DIGEST_SIZE]).digest() != data[-DIGEST_SIZE:]:
-        raise _fail(path, "SHA-256 checksum mismatch: the file is truncated, corrupted or was altered; export it again")
-    blob_start = PREAMBLE.size + header_len
-    if blob_start > len(data) - DIGEST_SIZE or blob_start % ALIGNMENT:
-        raise _fail(path, f"header length {header_len} does not fit the file of {len(data)} bytes")
+
+def _read_exactly(f: Any, n: int, path: Any, what: str) -> bytes:
+    """``n`` bytes of ``f``, read in bounded chunks (a lying size cannot make us allocate it), or a ValueError."""
+    chunks, remaining = [], n
+    while remaining:
+        chunk = f.read(min(remaining, 1 << 20))
+        if not chunk:
+            raise _fail(path, f"it ends inside the {what} ({n - remaining} of {n} bytes; truncated?)")
+        chunks.append(chunk)
+        remaining -= len(chunk)
+    return b"".join(chunks)
+
+
+def _parse_header(text: bytes, path: Any) -> dict[str, Any]:
+    """The JSON header, checked (format, version, structure) before any array is read."""
     try:
-        header = json.loads(data[PREAMBLE.size : blob_start].decode("utf-8"))
+        header = json.loads(text.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise _fail(path, f"the header is not UTF-8 JSON ({error})") from error
+        raise _fail(path, f"the header is not UTF-8 JSON ({error}); the file is corrupted or was altered") from None
+    except RecursionError:
+        raise _fail(path, "the header nests too deeply to be a policy header") from None
     if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
         raise _fail(path, f"format is {header.get('format') if isinstance(header, dict) else None!r}, expected {FORMAT_NAME!r}")
     version = header.get("version")
@@ -234,29 +260,94 @@ def read_policy_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str,
             "(a newer sb3-aac wrote it? upgrade sb3-aac, or export with this version)",
         )
     _check_header(header, path)
-    blob = memoryview(data)[blob_start : len(data) - DIGEST_SIZE]
-    if header["blob_size"] != len(blob):
-        raise _fail(path, f"the header announces {header['blob_size']} bytes of arrays, the file holds {len(blob)}")
-    arrays = {}
-    table = header["arrays"]
+    return header
+
+
+def read_policy_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """
+    Read and verify a policy file (``path``, or ``path + ".aacp"`` for a name without a suffix, as written).
+
+    The file is read in order and never further than its header declares: the magic bytes first, then the JSON
+    header (at most ``MAX_HEADER_BYTES``), whose sizes bound the arrays' bytes; so a link to an endless or huge
+    file is refused after a few bytes.
+
+    :return: the JSON header and the arrays (read-only float64 views of one buffer)
+    :raises ValueError: for a file that is not a complete, unaltered version-1 policy file
+    :raises FileNotFoundError: if there is no such file
+    """
+    if not os.path.exists(path):
+        path = policy_file_path(path)
+    if os.path.exists(path) and not os.path.isfile(path):
+        raise _fail(path, "it is not a regular file (a directory, device or pipe)")
+    with open(path, "rb") as f:
+        preamble = f.read(PREAMBLE.size)
+        if len(preamble) < PREAMBLE.size:
+            raise _fail(path, f"only {len(preamble)} bytes (truncated?)")
+        magic, header_len = PREAMBLE.unpack(preamble)
+        if magic != MAGIC:
+            raise _fail(path, f"it does not start with the magic bytes {MAGIC!r} (got {magic!r}); export one with sb3_aac.export_policy")
+        if header_len > MAX_HEADER_BYTES or (PREAMBLE.size + header_len) % ALIGNMENT:
+            raise _fail(path, f"header length {header_len}: at most {MAX_HEADER_BYTES} bytes, ending on a multiple of 8")
+        head = preamble + _read_exactly(f, header_len, path, "header")
+        try:
+            header = _parse_header(head[PREAMBLE.size :], path)
+        except ValueError as error:
+            _raise_if_altered(f, head, path, error)
+            raise
+        blob_size = header["blob_size"]
+        if blob_size > MAX_BLOB_BYTES:
+            raise _fail(path, f"it announces {blob_size} bytes of arrays, more than this reader accepts ({MAX_BLOB_BYTES})")
+        placements = _array_placements(header, path)
+        rest = _read_exactly(f, blob_size + DIGEST_SIZE, path, "arrays and checksum")
+        data = head + rest
+        if hashlib.sha256(data[:-DIGEST_SIZE]).digest() != data[-DIGEST_SIZE:]:
+            raise _fail(path, CHECKSUM_MISMATCH)
+        if f.read(1):
+            raise _fail(path, "bytes follow its SHA-256 checksum (trailing data: the file was altered); export it again")
+    blob = memoryview(data)[len(head) : len(data) - DIGEST_SIZE]
+    arrays = {
+        name: np.frombuffer(blob, dtype=ARRAY_DTYPE, count=math.prod(shape), offset=offset).reshape(shape)
+        for name, (offset, shape) in placements.items()
+    }
+    return header, arrays
+
+
+def _array_placements(header: dict[str, Any], path: Any) -> dict[str, tuple[int, tuple[int, ...]]]:
+    """Offset and shape of every array the header's sizes need, checked against its table and ``blob_size``."""
+    table, blob_size = header["arrays"], header["blob_size"]
+    placements = {}
     for name, shape in expected_array_shapes(header).items():
         entry = table.get(name)
         if not isinstance(entry, dict):
             raise _fail(path, f"missing array {name!r} (present: {sorted(table)})")
         try:
             offset, nbytes = entry["offset"], entry["nbytes"]
-            dtype, stored_shape = entry["dtype"], tuple(entry["shape"])
+            dtype, stored_shape = entry["dtype"], entry["shape"]
         except (KeyError, TypeError) as error:
             raise _fail(path, f"array {name!r}: malformed entry {entry!r}") from error
         if dtype != ARRAY_DTYPE:
             raise _fail(path, f"array {name!r} has dtype {dtype!r}, version 1 stores every array as {ARRAY_DTYPE!r}")
-        if stored_shape != shape:
-            raise _fail(path, f"array {name!r} has shape {stored_shape}, the header's sizes need {shape}")
+        if not (isinstance(stored_shape, list) and all(_count(s) for s in stored_shape)) or tuple(stored_shape) != shape:
+            raise _fail(path, f"array {name!r} has shape {stored_shape!r}, the header's sizes need {shape}")
         size = 8 * math.prod(shape)
-        if not (isinstance(offset, int) and offset >= 0 and offset % ALIGNMENT == 0 and nbytes == size and offset + size <= len(blob)):
-            raise _fail(path, f"array {name!r}: offset {offset!r} / nbytes {nbytes!r} do not fit the {len(blob)}-byte blob")
-        arrays[name] = np.frombuffer(blob, dtype=ARRAY_DTYPE, count=math.prod(shape), offset=offset).reshape(shape)
-    return header, arrays
+        if not (_count(offset) and offset % ALIGNMENT == 0 and _count(nbytes) and nbytes == size and offset + size <= blob_size):
+            raise _fail(path, f"array {name!r}: offset {offset!r} / nbytes {nbytes!r} do not fit the {blob_size}-byte blob")
+        placements[name] = (offset, shape)
+    return placements
+
+
+def _raise_if_altered(f: Any, head: bytes, path: Any, error: ValueError) -> None:
+    """After a header error: if the file is a regular file of sane size whose checksum fails, say that instead (an
+    altered byte is the likelier story than a crafted header)."""
+    try:
+        size = os.fstat(f.fileno()).st_size
+    except OSError:
+        return
+    if not stat.S_ISREG(os.fstat(f.fileno()).st_mode) or not len(head) + DIGEST_SIZE <= size <= len(head) + MAX_BLOB_BYTES:
+        return
+    data = head + _read_exactly(f, size - len(head), path, "file")
+    if hashlib.sha256(data[:-DIGEST_SIZE]).digest() != data[-DIGEST_SIZE:]:
+        raise _fail(path, CHECKSUM_MISMATCH) from error
 
 
 def _compile_act_kernel() -> Any:
@@ -415,6 +506,9 @@ class RuntimePolicy:
     def load(cls, path: str | os.PathLike, backend: str = "auto") -> RuntimePolicy:
         """
         Read a policy file written by :func:`sb3_aac.export_policy`.
+
+        :param path: the file, or the name given to ``export_policy`` (``.aacp`` is appended to a name without a
+            suffix when no such file exists, as ``export_policy`` appends it)
 
         :param backend: how :meth:`act` computes: ``"numpy"`` (:class:`BankForward`, the code training runs),
             ``"numba"`` (compiled, several times faster on one observation), or ``"auto"`` (numba when it can be

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -150,7 +151,7 @@ def test_errors_on_files(trained: Path, tmp_path: Path, capsys) -> None:
     (tmp_path / "notes.txt").write_text("hello")
     assert "must be a .zip or .aacp" in run_error(capsys, ["evaluate", str(tmp_path / "notes.txt")])
     (tmp_path / "broken.zip").write_bytes(b"PK\x03\x04 not really")
-    assert "cannot load" in run_error(capsys, ["evaluate", str(tmp_path / "broken.zip")])
+    assert "broken.zip is not a usable saved model: it is not a zip archive" in run_error(capsys, ["evaluate", str(tmp_path / "broken.zip")])
     damaged = bytearray((trained / "policy.aacp").read_bytes())
     damaged[100] ^= 1
     (tmp_path / "damaged.aacp").write_bytes(bytes(damaged))
@@ -163,3 +164,69 @@ def test_errors_on_files(trained: Path, tmp_path: Path, capsys) -> None:
 def test_bench_quick(capsys) -> None:
     # The runtime benchmark in its quick mode (the env benchmark alone takes as long as this whole file).
     assert main(["bench", "--only", "runtime"]) == 0
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["train", "--timesteps", "100000", "--out", "/proc"],
+        ["train", "--timesteps", "100000", "--out", "/sys/kernel"],
+        ["train", "--timesteps", "100000", "--tensorboard", "/proc/tb"],
+        ["train", "--timesteps", "100000", "--out", ""],
+        ["reliability", "dribbler", "--players", "100000", "--out", "/proc/x.png"],
+        ["render", "dribbler", "--out", "/proc/x.gif"],
+        ["export", "MODEL", "/proc/x.aacp"],
+    ],
+)
+def test_unwritable_outputs_fail_before_any_work(trained: Path, capsys, argv: list[str]) -> None:
+    argv = [str(trained / "model.zip") if a == "MODEL" else a for a in argv]
+    start = time.perf_counter()
+    err = run_error(capsys, argv)
+    assert "cannot write" in err or "current directory" in err
+    assert len(err.strip().splitlines()) == 1
+    assert time.perf_counter() - start < 5  # refused before training / evaluating 100,000 players
+    assert "training" not in capsys.readouterr().out
+
+
+def test_damaged_models_are_one_line(trained: Path, tmp_path: Path, capsys) -> None:
+    import io
+    import zipfile
+
+    import torch as th
+
+    members = {n: zipfile.ZipFile(trained / "model.zip").read(n) for n in zipfile.ZipFile(trained / "model.zip").namelist()}
+    data = json.loads(members["data"])
+    nan_weights = io.BytesIO()
+    th.save({k: v * float("nan") for k, v in th.load(io.BytesIO(members["policy.pth"]), weights_only=True).items()}, nan_weights)
+    cases = {
+        "garbage_pth": ({"policy.pth": b"\x00garbage" * 50}, "'policy.pth' is not a torch tensor file"),
+        "data_list": ({"data": b"[1, 2, 3]"}, "'data' member is a JSON list"),
+        "missing_keys": ({"data": json.dumps({k: data[k] for k in list(data)[:3]}).encode()}, "lacks the fields"),
+        "wrong_space": ({"data": json.dumps({**data, "action_space": data["observation_space"]}).encode()}, "SarsaAAC.load failed"),
+        "nan_weights": ({"policy.pth": nan_weights.getvalue()}, "NaN or inf"),
+    }
+    for name, (changed, message) in cases.items():
+        path = tmp_path / f"{name}.zip"
+        with zipfile.ZipFile(path, "w") as archive:
+            for member, content in {**members, **changed}.items():
+                archive.writestr(member, content)
+        err = run_error(capsys, ["evaluate", str(path), "--episodes", "2"])
+        assert len(err.strip().splitlines()) == 1 and str(path) in err and message in err, err
+    (tmp_path / "empty.zip").write_bytes(b"")
+    assert "it is empty" in run_error(capsys, ["evaluate", str(tmp_path / "empty.zip")])
+    if Path("/dev/zero").exists():
+        (tmp_path / "zero.zip").symlink_to("/dev/zero")
+        assert "not a regular file" in run_error(capsys, ["export", str(tmp_path / "zero.zip"), str(tmp_path / "x.aacp")])
+
+
+def test_train_out_replaces_the_set_and_keeps_other_files(trained: Path, tmp_path: Path, capsys) -> None:
+    import shutil
+
+    out = tmp_path / "run"
+    shutil.copytree(trained, out)
+    (out / "reliability.png").write_bytes(b"png")
+    assert main(["train", "--timesteps", "200", "--n-envs", "2", "--seed", "7", "--out", str(out), "--eval-episodes", "0",
+                 "--set", "n_rbf=3"]) == 0  # fmt: skip
+    assert json.loads((out / "run.json").read_text())["seed"] == 7
+    assert (out / "reliability.png").read_bytes() == b"png"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"] and not list(out.glob(".*"))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import struct
@@ -272,3 +273,99 @@ def test_header_is_plain_json(good_file: Path) -> None:
         assert header[key] == expected[key]
     shapes = {name: list(a.shape) for name, a in policy_arrays(model.policy).items()}
     assert {name: entry["shape"] for name, entry in header["arrays"].items()} == shapes
+
+
+# ---------------------------------------------------------------------------------------------------- hostile files
+
+
+def header_only_file(text: bytes) -> bytes:
+    """A file with the magic, a given header and a valid checksum (no arrays)."""
+    from sb3_aac.runtime import MAGIC, PREAMBLE
+
+    text += b" " * (-(PREAMBLE.size + len(text)) % 8)
+    body = PREAMBLE.pack(MAGIC, len(text)) + text
+    return body + hashlib.sha256(body).digest()
+
+
+@pytest.mark.parametrize("device", ["/dev/zero", "/dev/urandom"])
+def test_a_link_to_an_endless_file_is_refused_at_once(tmp_dir: Path, device: str) -> None:
+    if not Path(device).exists():
+        pytest.skip(f"no {device}")
+    link = tmp_dir / f"{Path(device).name}.aacp"
+    link.unlink(missing_ok=True)
+    link.symlink_to(device)
+    with pytest.raises(ValueError, match="not a regular file"):
+        RuntimePolicy.load(link)
+
+
+def test_endless_stream_is_read_header_first(tmp_dir: Path) -> None:
+    """Through an open stream (as a pipe would give), only the preamble is read before the magic is checked, and a
+    lying header length is refused before it is read."""
+    from sb3_aac.runtime import MAGIC, PREAMBLE
+
+    class Endless:
+        def __init__(self, start: bytes):
+            self.start, self.served = start, 0
+
+        def read(self, n: int) -> bytes:
+            self.served += n
+            return (self.start + b"\0" * n)[:n] if self.served == n else b"\0" * n
+
+    import sb3_aac.runtime as runtime
+
+    for start, message in [(b"", "magic"), (PREAMBLE.pack(MAGIC, 2**40), "header length")]:
+        stream = Endless(start)
+        try:
+            runtime.open = lambda *args, **kwargs: contextlib.nullcontext(stream)  # type: ignore[attr-defined]
+            with pytest.raises(ValueError, match=message):
+                read_policy_file(tmp_dir / "good.aacp")
+        finally:
+            del runtime.open
+        assert stream.served <= PREAMBLE.size
+
+
+@pytest.mark.parametrize("nesting", [b"[" * 100_000 + b"]" * 100_000, b'{"a":' * 50_000 + b"1" + b"}" * 50_000])
+def test_a_deeply_nested_header_is_a_value_error(tmp_dir: Path, nesting: bytes) -> None:
+    with pytest.raises(ValueError, match="nests too deeply"):
+        load_bytes(tmp_dir, header_only_file(nesting))
+
+
+def test_negative_float_and_bool_sizes_are_refused(good_file: Path, tmp_dir: Path) -> None:
+    def negative_shape(h):
+        h["action"]["types"][1]["shape"] = [-1, -h["action"]["types"][1]["dim"]]
+
+    def float_shape(h):
+        h["observation"]["shape"] = [float(h["observation"]["size"])]
+
+    def float_dim(h):
+        dim = h["action"]["types"][0]["dim"]
+        h["action"]["types"][0].update(dim=float(dim), shape=[float(dim)])
+
+    def bool_start(h):
+        h["action"]["type_start"] = True
+
+    def huge(h):
+        h["observation"].update(size=10**12, shape=[10**12])
+        h["approximators"]["features"]["n_features"] = 10**12 * h["approximators"]["features"]["n_rbf"]
+
+    for edit in (negative_shape, float_shape, float_dim, bool_start, huge):
+        with pytest.raises(ValueError, match="not a usable sb3-aac policy file"):
+            load_bytes(tmp_dir, rewrite(good_file, edit))
+
+
+def test_not_a_regular_file(tmp_dir: Path) -> None:
+    (tmp_dir / "folder.aacp").mkdir(exist_ok=True)
+    with pytest.raises(ValueError, match="not a regular file"):
+        RuntimePolicy.load(tmp_dir / "folder.aacp")
+    with pytest.raises(FileNotFoundError):
+        RuntimePolicy.load(tmp_dir / "absent.aacp")
+
+
+def test_load_accepts_the_name_export_was_given(tmp_dir: Path, monkeypatch) -> None:
+    model = randomised_model("RbfPolicy", "flat", n_rbf=3)
+    monkeypatch.chdir(tmp_dir)
+    assert export_policy(model, "policy") == Path("policy.aacp")
+    assert RuntimePolicy.load("policy").header["format"] == "sb3-aac-policy"
+    assert export_policy(model, tmp_dir / "sub" / "named") == tmp_dir / "sub" / "named.aacp"
+    assert RuntimePolicy.load(tmp_dir / "sub" / "named").n_types == 3
+    assert not [p for p in tmp_dir.rglob(".*")], "a stray temporary"

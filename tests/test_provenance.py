@@ -103,3 +103,13 @@ def test_interrupted_and_killed_invocations_are_logged(tmp_path):
     assert [e["command"] for e in entries] == ["a", "b", "c", "d", "old"]
     assert [e["status"] for e in entries] == ["interrupted", "failed: ZeroDivisionError", "finished", "killed", "finished"]
     assert entries[0]["done"] == 3 and entries[2]["wall_s"] >= 0 and entries[3]["wall_s"] is None
+
+
+def test_a_torn_log_line_is_skipped_with_a_warning_naming_it(tmp_path, capsys):
+    with provenance.logged_invocation(tmp_path, command="a", workers=1) as log:
+        log.update(done=1, skipped=0, failed=0)
+    with open(tmp_path / provenance.RUN_LOG, "a") as f:
+        f.write('{"event": "start", "invocation": "k2", "comm')  # the writer was killed mid-line
+    entries = provenance.invocations(tmp_path)
+    assert [e["command"] for e in entries] == ["a"]
+    assert f"{provenance.RUN_LOG}:3 is not a JSON record" in capsys.readouterr().err

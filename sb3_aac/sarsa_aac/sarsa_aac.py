@@ -13,6 +13,7 @@ from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
+from sb3_aac.common.model_files import check_model_file
 from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
@@ -507,6 +508,7 @@ class SarsaAAC(BaseAlgorithm):
         :raises ValueError: if the file is not a complete SarsaAAC model (corrupted, truncated, or another
             algorithm's), or if ``env`` does not match the model's spaces
         """
+        check_model_file(path)  # one ValueError naming the file for any damage, before SB3 unpickles anything
         try:
             return super().load(path, env, device, custom_objects, print_system_info, force_reset, **kwargs)
         except (zipfile.BadZipFile, EOFError, AssertionError, KeyError, RuntimeError, OSError) as e:

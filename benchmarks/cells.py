@@ -1,0 +1,79 @@
+"""The benchmark's result files (``DIR/cells/<cell_id>.json``, ``DIR/reliability.json``): where they live, and reading
+them so that a damaged file is named and skipped (or recomputed), never fatal and never taken for a finished cell.
+
+Light on purpose (json and pathlib): the runner and the report both read results through here.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+from typing import Any
+
+RESULT_KEYS = ("cell_id", "cell")  # every cell file has these, and "final" (trained) or "references"
+
+
+def cell_path(out: Path, cell_id: str) -> Path:
+    return Path(out) / "cells" / f"{cell_id}.json"
+
+
+def read_json_object(path: Path) -> dict[str, Any]:
+    """A JSON object from ``path``. :raises ValueError: naming the file and what is wrong with it."""
+    try:
+        data = json.loads(Path(path).read_bytes().decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as error:
+        raise ValueError(f"{path} is damaged (not UTF-8 JSON: {type(error).__name__}: {error})") from None
+    except OSError as error:
+        raise ValueError(f"{path} cannot be read ({error.strerror or error})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{path} is damaged (a JSON {type(data).__name__}, expected an object)")
+    return data
+
+
+def read_cell_file(path: Path) -> dict[str, Any]:
+    """A finished cell's result. :raises ValueError: naming the file, if it is damaged or not a finished cell's."""
+    result = read_json_object(path)
+    missing = [key for key in RESULT_KEYS if key not in result]
+    if missing or not isinstance(result["cell"], dict) or not ("final" in result or "references" in result):
+        raise ValueError(f"{path} is damaged (it lacks {missing or ['final or references']})")
+    if result["cell_id"] != Path(path).stem:
+        raise ValueError(f"{path} is damaged (it holds the result of cell {result['cell_id']!r})")
+    return result
+
+
+def is_finished(out: Path, cell: Any) -> bool:
+    """Whether ``cell`` has a sound result file of this very cell; a damaged one is reported and will be recomputed."""
+    path = cell_path(out, cell.cell_id)
+    if not path.exists():
+        return False
+    try:
+        result = read_cell_file(path)
+    except ValueError as error:
+        warnings.warn(f"{error}; the cell will be computed again", stacklevel=2)
+        return False
+    if result["cell"] != cell.to_dict():
+        warnings.warn(f"{path} holds another definition of the cell; it will be computed again", stacklevel=2)
+        return False
+    return True
+
+
+def read_cells(out: Path) -> tuple[list[dict[str, Any]], list[str]]:
+    """Every sound cell result in ``out/cells`` (hidden temporaries skipped), and a message for each damaged file."""
+    results, damaged = [], []
+    for path in sorted((Path(out) / "cells").glob("*.json")):
+        if path.name.startswith("."):
+            continue
+        try:
+            results.append(read_cell_file(path))
+        except ValueError as error:
+            damaged.append(str(error))
+    return results, damaged
+
+
+def load_cells(out: Path) -> list[dict[str, Any]]:
+    """:func:`read_cells`' results, with a warning naming each damaged file (skipped)."""
+    results, damaged = read_cells(out)
+    for message in damaged:
+        warnings.warn(f"{message}; skipped", stacklevel=2)
+    return results

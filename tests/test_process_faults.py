@@ -1,0 +1,196 @@
+"""Killed processes: the benchmark runner's workers end with their driver, and a killed trainer or runner never
+leaves a half-written file (Linux: processes are found through /proc)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import random
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from benchmarks import cells as cell_files
+from benchmarks.presets import Cell
+
+pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="finds processes through /proc")
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "envs"), os.environ.get("PYTHONPATH", "")])}
+ENV_ID = "RoboCupDribblePaper-v0"
+TINY = {"eval_every": 50, "eval_episodes": 5, "final_episodes": 5}
+GRID = [
+    Cell(ENV_ID, "Reference", "references", eval_episodes=5, final_episodes=5),
+    Cell(ENV_ID, "SarsaAAC", "rbf10", 0, 600, **TINY),
+    Cell(ENV_ID, "SarsaAAC", "rbf10", 1, 600, **TINY),
+]
+DRIVER = """
+import sys
+from benchmarks.presets import Cell
+from benchmarks.run import main, run_grid
+import benchmarks.run as run
+import signal
+signal.signal(signal.SIGTERM, run._exit_on_sigterm)
+cells = [Cell.from_dict(c) for c in {cells!r}]
+run_grid(cells, sys.argv[1], workers=2, progress=False)
+"""
+
+
+def _stat(pid: int) -> tuple[str, int] | None:
+    """(state, parent pid) of a process, None if it is gone."""
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except (FileNotFoundError, ProcessLookupError):
+        return None
+    fields = text[text.rindex(")") + 2 :].split()
+    return fields[0], int(fields[1])
+
+
+def descendants(root: int) -> set[int]:
+    """The live processes below ``root``."""
+    parents = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit() and (stat := _stat(int(entry.name))) is not None and stat[0] != "Z":
+            parents[int(entry.name)] = stat[1]
+    found, frontier = set(), {root}
+    while frontier:
+        frontier = {pid for pid, parent in parents.items() if parent in frontier} - found
+        found |= frontier
+    return found
+
+
+def alive(pids: set[int]) -> set[int]:
+    return {pid for pid in pids if (stat := _stat(pid)) is not None and stat[0] != "Z"}
+
+
+def wait_gone(pids: set[int], seconds: float) -> set[int]:
+    deadline = time.monotonic() + seconds
+    while alive(pids) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return alive(pids)
+
+
+def check_no_half_written_file(out: Path) -> None:
+    for path in (out / "cells").glob("*.json"):
+        cell_files.read_cell_file(path)  # raises, naming it, if half-written
+    leftovers = [p for sub in ("cells", "models", "errors") for p in (out / sub).glob(".*")]
+    owners = {int(match.group(1)) for p in leftovers if (match := re.search(r"\.sb3aac-(\d+)\.tmp", p.name))}
+    assert not alive(owners), f"temporaries of live processes: {leftovers}"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("seed", "sig"), [(0, signal.SIGKILL), (1, signal.SIGTERM)])
+def test_killed_runner_leaves_no_process_and_no_half_written_file(tmp_path: Path, seed: int, sig: int) -> None:
+    script = DRIVER.format(cells=[c.to_dict() for c in GRID])
+    driver = subprocess.Popen([sys.executable, "-c", script, str(tmp_path)], env=ENV, cwd=ROOT, stderr=subprocess.DEVNULL)
+    kill_at = time.monotonic() + random.Random(seed).uniform(1.0, 12.0)  # from the workers' start-up to their cells
+    seen: set[int] = set()
+    while time.monotonic() < kill_at and driver.poll() is None:
+        seen |= descendants(driver.pid)  # the workers and the resource tracker, as they start
+        time.sleep(0.05)
+    driver.send_signal(sig)
+    driver.wait(30)
+    assert not wait_gone(seen, 30.0), "processes outlived the killed runner"  # a worker may still be importing
+    check_no_half_written_file(tmp_path)
+
+
+def test_a_damaged_cell_file_is_recomputed_and_named(tmp_path: Path) -> None:
+    from benchmarks import run as bench_run
+    from benchmarks.report import build_report
+
+    reference = GRID[0]
+    assert not bench_run.run_grid([reference], tmp_path, workers=1, progress=False)["failed"]
+    path = cell_files.cell_path(tmp_path, reference.cell_id)
+    good = path.read_bytes()
+    path.write_bytes(good[: len(good) // 2])  # as a disk-full or a foreign writer could leave it
+    with pytest.warns(UserWarning, match=f"{path.name} is damaged.*computed again"):
+        status = bench_run.run_grid([reference], tmp_path, workers=1, progress=False)
+    assert status["done"] == [reference.cell_id]
+    assert json.loads(path.read_text())["cell_id"] == reference.cell_id
+    # the report names a damaged file instead of crashing on it
+    other = tmp_path / "cells" / "RoboCupDribble-v0__Reference__references.json"
+    other.write_text('{"cell_id": ')
+    report = build_report(tmp_path, figures=False).read_text()
+    assert "Damaged result files" in report and other.name in report
+
+
+def test_a_live_runs_temporaries_and_running_cell_are_left_alone(tmp_path: Path) -> None:
+    from benchmarks import run as bench_run
+
+    reference = GRID[0]
+    (tmp_path / "cells").mkdir()
+    live = tmp_path / "cells" / f".{reference.cell_id}.json.sb3aac-{os.getpid()}.tmpabc"  # a live process's temporary
+    dead = tmp_path / "cells" / f".{reference.cell_id}.json.sb3aac-{2**22 + 12345}.tmpabc"  # beyond pid_max: dead
+    live.write_text("{")
+    dead.write_text("{")
+    with bench_run.cell_lock(tmp_path, reference.cell_id) as locked:
+        assert locked
+        # another "run" of the grid while this process holds the cell
+        script = (
+            "import sys; from benchmarks.presets import Cell; from benchmarks.run import run_grid; "
+            f"print(run_grid([Cell.from_dict({reference.to_dict()!r})], sys.argv[1], workers=1, progress=False)['busy'])"
+        )
+        result = subprocess.run(
+            [sys.executable, "-c", script, str(tmp_path)], env=ENV, cwd=ROOT, capture_output=True, text=True
+        )
+        assert result.returncode == 0, result.stderr
+        assert reference.cell_id in result.stdout
+    assert live.exists() and not dead.exists()
+
+
+# ------------------------------------------------------------------------------------------------------ the trainer
+
+TRAIN = ["-m", "sb3_aac.cli", "train", "--n-envs", "2", "--eval-episodes", "0", "--set", "n_rbf=3"]
+
+
+def run_files(out: Path) -> dict[str, bytes]:
+    return {name: (out / name).read_bytes() for name in ("model.zip", "policy.aacp", "run.json") if (out / name).exists()}
+
+
+def digest(files: dict[str, bytes]) -> str:
+    return hashlib.sha256(b"".join(files[k] for k in sorted(files))).hexdigest()
+
+
+@pytest.mark.slow
+def test_killed_trainer_leaves_the_old_set_or_the_new_set(tmp_path: Path) -> None:
+    from sb3_aac import RuntimePolicy, SarsaAAC
+
+    out = tmp_path / "run"
+    start = time.monotonic()
+    subprocess.run(
+        [sys.executable, *TRAIN, "--timesteps", "300", "--seed", "1", "--out", str(out)],
+        env=ENV,
+        check=True,
+        capture_output=True,
+    )
+    duration = time.monotonic() - start
+    (out / "notes.txt").write_text("the user's own file")
+    old = run_files(out)
+    rng = random.Random(0)
+    outcomes = []
+    for attempt in range(3):
+        argv = [sys.executable, *TRAIN, "--timesteps", "400", "--seed", str(2 + attempt), "--out", str(out)]
+        trainer = subprocess.Popen(argv, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(rng.uniform(0.3, 1.1) * duration)
+        trainer.send_signal(signal.SIGKILL if attempt % 2 == 0 else signal.SIGTERM)
+        trainer.wait(30)
+        files = run_files(out)
+        assert set(files) == {"model.zip", "policy.aacp", "run.json"}, f"attempt {attempt}: {sorted(files)}"
+        assert (out / "notes.txt").read_text() == "the user's own file"
+        if digest(files) == digest(old):
+            outcomes.append("old")
+            continue
+        run = json.loads(files["run.json"])
+        assert run["seed"] == 2 + attempt and run["timesteps"] == 400
+        assert SarsaAAC.load(out / "model.zip").num_timesteps == 400
+        assert RuntimePolicy.load(out / "policy.aacp").header["metadata"]["num_timesteps"] == 400
+        outcomes.append("new")
+        old = files
+    assert not [p for p in out.iterdir() if p.name.startswith(".")], "a temporary inside the run directory"
+    print("outcomes", outcomes)
