@@ -19,11 +19,16 @@ An :class:`ApproximatorBank` holds ``A`` independent approximators ``f_a(s)``, `
 The three function approximators of Uc-Cetina (2013, Sec. 4.2) are the configurations
 (``n_rbf=None``, ``H``) (MLP), (``m``, ``H``) (MLP with an RBF filter layer) and (``m``, ``None``) (RBF arrays).
 
-Training is per-sample gradient descent on ``0.5 * err**2`` with a *normalised* step size (chosen by us; the paper
-gives none): each layer's step is divided by ``1 + ||input of that layer||**2``. For a linear head this is the
-normalised LMS rule, so a learning rate of 1 moves that sample's output all the way to its target and any rate in
-``(0, 1]`` is stable whatever the number of features; the default rates therefore work for 10, 30 or 50 RBFs per
-input alike. Updates from the ``n`` samples of a batch (one per environment) are summed.
+Training is gradient descent on ``0.5 * err**2`` with *normalised* step sizes (chosen by us; the paper gives none),
+for a batch of ``n`` samples (one per environment) at once:
+
+- per sample, each layer's step is divided by ``1 + ||input of that layer||**2`` (normalised LMS). For one sample
+  and a linear head a learning rate of 1 moves the output all the way to its target, whatever the number of
+  features, so the default rates work for 10, 30 or 50 RBFs per input alike;
+- the batch's summed steps are divided by a factor that bounds how much the samples' steps add up along shared
+  directions (:func:`step_normalisers`): 1 for one sample and for samples whose features do not overlap, ``n``
+  for ``n`` identical samples, and separately for the weights and the bias, which every sample shares. So the
+  summed step of each block is non-expansive for any rate in ``(0, 1]`` whatever the number of lanes.
 
 The parameters are torch tensors (so SB3's ``state_dict``-based save/load keeps working), but every computation is
 numpy on the CPU: the forward pass is :class:`sb3_aac.runtime.BankForward`, the one implementation of the formulas
@@ -189,29 +194,56 @@ class BankKernel(BankForward):
         out, hidden = self.outputs(x)
         return out, BankCache(x, hidden)
 
-    def update(self, cache: BankCache, err: np.ndarray, lr: np.ndarray) -> None:
+    def update(self, cache: BankCache, err: np.ndarray, lr: np.ndarray, hidden_gain: np.ndarray | None = None) -> None:
         """
-        One normalised gradient step on ``0.5 * err**2`` per sample, summed over the samples, in place.
+        One batch-normalised gradient step on ``0.5 * err**2`` (see the module docstring), in place.
 
         :param cache: from :meth:`forward` on the same weights; its first ``n`` rows are used
         :param err: ``(n, A)`` target minus output; 0 leaves an approximator unchanged for that sample
         :param lr: ``(A,)`` learning rate of each approximator
+        :param hidden_gain: ``(A,)`` factor on each approximator's hidden-layer step (MLP heads only; None: 1).
+            An approximator whose outputs are in units of ``sigma`` takes ``1 / sigma**2`` here, so that its
+            hidden layer moves as if its targets were divided by ``sigma`` (see :class:`sb3_aac.SarsaAAC`).
         """
         n = len(err)
         x = cache.x[:n]
-        x_norm = 1.0 / (1.0 + np.einsum("nf,nf->n", x, x))  # (n,)
         g = err * lr  # (n, A)
         if not self.mlp:
-            g *= x_norm[:, None]
-            self.w += g.T @ x
-            self.b += g.sum(0)
+            weights, bias = step_normalisers(x)
+            self.w += (g * weights[:, None]).T @ x
+            self.b += (g * bias[:, None]).sum(0)
             return
         h = cache.hidden[:n]  # (n, A, H)
+        x_weights, x_bias = step_normalisers(x)
         # Backpropagate through the old output weights before changing them.
-        g_hidden = (g[:, :, None] * self.w2) * (1.0 - h * h) * x_norm[:, None, None]  # (n, A, H)
-        g_out = g / (1.0 + np.einsum("nah,nah->na", h, h))  # (n, A)
-        self.w2 += np.einsum("na,nah->ah", g_out, h)
-        self.b2 += g_out.sum(0)
-        g_hidden = g_hidden.reshape(n, -1)
-        self.w1_flat += g_hidden.T @ x
-        self.b1_flat += g_hidden.sum(0)
+        g_hidden = g if hidden_gain is None else g * hidden_gain
+        g_hidden = (g_hidden[:, :, None] * self.w2) * (1.0 - h * h)  # (n, A, H)
+        h_weights, h_bias = step_normalisers(h)  # (n, A) each
+        self.w2 += np.einsum("na,nah->ah", g * h_weights, h)
+        self.b2 += (g * h_bias).sum(0)
+        self.w1_flat += (g_hidden.reshape(n, -1) * x_weights[:, None]).T @ x
+        self.b1_flat += (g_hidden.reshape(n, -1) * x_bias[:, None]).sum(0)
+
+
+def step_normalisers(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Per-sample factors of a layer's weight step and bias step for a batch of that layer's inputs.
+
+    For inputs ``x`` ``(n, ..., F)`` (one layer input per sample, and per approximator if there are middle axes),
+    with ``w_i = 1 / (1 + ||x_i||**2)`` (normalised LMS), the weight step of sample ``i`` is scaled by
+    ``w_i / c_w`` and its bias step by ``w_i / c_b``, where
+    ``c_w = max(1, max_i sqrt(w_i) |x_i| . sum_j sqrt(w_j) |x_j|)`` and ``c_b = max(1, sum_j w_j)``.
+    ``c_w`` is Gershgorin's bound on the largest eigenvalue of the batch's normalised Gram matrix
+    ``sqrt(w_i w_j) x_i . x_j`` (``c_b`` is that eigenvalue for the bias's constant input), so each block's
+    summed step is non-expansive for rates in ``(0, 1]`` whatever ``n`` and ``F``. For one sample both are 1.
+
+    :return: weight factors and bias factors, each of shape ``x.shape[:-1]``
+    """
+    energy = np.einsum("...f,...f->...", x, x)
+    w = 1.0 / (1.0 + energy)
+    root = np.sqrt(w)
+    scaled = np.abs(x) * root[..., None]
+    gram_row_sums = np.einsum("n...f,...f->n...", scaled, scaled.sum(0))
+    weight_batch = np.maximum(gram_row_sums.max(0), 1.0)
+    bias_batch = np.maximum(w.sum(0), 1.0)
+    return w / weight_batch, w / bias_batch

@@ -94,6 +94,15 @@ class SarsaAACPolicy(BasePolicy):
         self.approximators.invalidate_kernel()
         return self.approximators.numpy_kernel()
 
+    def scale_value_outputs(self, factor: float) -> None:
+        """Multiply the outputs of the action-type actor and the critic (not the parameter actor's) by ``factor``."""
+        bank = self.approximators
+        rows = [*range(self.n_types), self.value_index]
+        with th.no_grad():
+            weight, bias = (bank.weight, bank.bias) if bank.hidden_units is None else (bank.weight2, bank.bias2)
+            weight[rows] *= factor
+            bias[rows] *= factor
+
     def forward(self, obs: PyTorchObs) -> th.Tensor:
         """All approximator outputs ``(n, A)`` as a tensor (column layout in the class docstring), computed by numpy."""
         assert isinstance(obs, th.Tensor)

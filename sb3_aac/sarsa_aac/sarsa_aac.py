@@ -1,9 +1,12 @@
 from __future__ import annotations
 
+import math
 import sys
 import time
 import zipfile
 from collections import deque
+from collections.abc import Mapping
+from types import MappingProxyType
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -13,13 +16,18 @@ from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
+from sb3_aac.common.array_env import array_path
 from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
+# The info of a lane whose episode goes on, on the array path (read-only, shared by those lanes).
+_NO_INFO: Mapping[str, Any] = MappingProxyType({})
 
 TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
 # Schedules are re-evaluated whenever training progress has moved by this much (0.1%), not at every step.
 SCHEDULE_RESOLUTION = 1e-3
+# The weights are checked (and kept as the last finite ones) every this many steps.
+CHECK_INTERVAL = 256
 
 
 def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator) -> np.ndarray:
@@ -198,6 +206,10 @@ class SarsaAAC(BaseAlgorithm):
         self.policy = self.policy.to(self.device)
         # The action a' chosen at _last_obs and not yet executed: (obs (n, D), k (n,), scaled params (n, P)).
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        # Count and sum of squares of the lanes' discounted returns so far; return_scale = sqrt(sum / count).
+        # Kept when load() calls this after restoring them (0 until the first non-zero reward).
+        self._return_moments = getattr(self, "_return_moments", np.zeros(2))
+        self.return_scale = getattr(self, "return_scale", 0.0)
         self._reset_keyword_buffers()
         self._reset_train_stats()
 
@@ -212,6 +224,7 @@ class SarsaAAC(BaseAlgorithm):
             *super()._excluded_save_params(),
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
             *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
+            *("_hidden_gain", "_lane_returns", "_finite_weights"),
             "_ep_keyword_buffers",
         ]
 
@@ -220,7 +233,10 @@ class SarsaAAC(BaseAlgorithm):
     def _explore(self, out: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Exploratory types ``(n,)`` and scaled, clipped parameters ``(n, P)`` from bank outputs ``(n, A)``."""
         policy = self.policy
-        k = select_types(out[:, policy.q_slice], self.exploration_rate, self.type_exploration, self._rng)
+        rate = self.exploration_rate
+        if self.type_exploration == "boltzmann" and self.return_scale > 0:
+            rate *= self.return_scale  # the temperature is in units of the return scale
+        k = select_types(out[:, policy.q_slice], rate, self.type_exploration, self._rng)
         params = out[:, policy.param_slice]
         if self.param_noise > 0:
             # Not Generator.normal(params, ...): with an array mean it costs several times more.
@@ -295,12 +311,18 @@ class SarsaAAC(BaseAlgorithm):
             self._pending = (obs, *self._explore(self._kernel.forward(obs)[0]))
 
         self._update_schedules()
+        self._keep_finite_weights()
+        array_env = array_path(env)
         callback.on_rollout_start()
         try:
             while self.num_timesteps < total_timesteps:
                 _, k, params = self._pending
-                actions = self.policy.spec.to_env(k, params)
-                new_obs, rewards, dones, infos = env.step(actions)
+                if array_env is None:
+                    actions = self.policy.spec.to_env(k, params)
+                    new_obs, rewards, dones, infos = env.step(actions)
+                else:
+                    actions = (k, params)
+                    new_obs, rewards, dones, infos = self._step_arrays(array_env, k, params)
                 self.num_timesteps += env.num_envs
 
                 callback.update_locals(locals())
@@ -323,6 +345,22 @@ class SarsaAAC(BaseAlgorithm):
         callback.on_rollout_end()
         callback.on_training_end()
         return self
+
+    def _step_arrays(self, env: Any, k: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
+        """
+        One step on the array path (:mod:`sb3_aac.common.array_env`), returned as SB3's ``VecEnv.step`` would:
+        ``info`` dicts are built only for the lanes whose episode ended (the others share one empty dict).
+        """
+        step = env.step_arrays(k, self.policy.spec.unscale(params))
+        dones = step.terminated | step.truncated
+        infos: list[Mapping[str, Any]] = [_NO_INFO] * len(dones)
+        for i in np.flatnonzero(dones):
+            info = {key: values[i] for key, values in step.episode_info.items()}
+            info["episode"] = {"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])}
+            info["terminal_observation"] = step.terminal_observations[i]
+            info["TimeLimit.truncated"] = bool(step.truncated[i])
+            infos[i] = info
+        return step.observations, step.rewards, dones, infos
 
     def _update_schedules(self) -> None:
         """Evaluate the exploration and learning-rate schedules at the current progress."""
@@ -357,6 +395,8 @@ class SarsaAAC(BaseAlgorithm):
             batch = np.concatenate((obs, next_obs))
         # One forward pass for s (weights as they are now), s' and the terminal observations.
         out, cache = kernel.forward(batch)
+        if not math.isfinite(out.sum()):  # one reduction catches NaN and inf before an action is chosen from them
+            self._on_non_finite_outputs(batch)
         current, following = out[:n], out[n : 2 * n]
         next_k, next_params = self._explore(following)
         v_next = following[:, vi]
@@ -368,6 +408,7 @@ class SarsaAAC(BaseAlgorithm):
             discount[truncated] = gamma
 
         rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
+        self._track_return_scale(rewards, dones)
         delta = rewards + discount * v_next - current[:, vi]
         q_error = rewards + discount * q_next - current[rows, k]
         err = np.zeros_like(current)
@@ -375,13 +416,60 @@ class SarsaAAC(BaseAlgorithm):
         # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0.
         err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
         err[:, vi] = delta
-        kernel.update(cache, err, self._lr)
+        kernel.update(cache, err, self._lr, self._hidden_gain)
         self._n_updates += 1
 
         self._pending = (next_obs, next_k, next_params)
         self._td_chunks.append((delta, q_error, k))
-        if len(self._td_chunks) >= 256:
+        if len(self._td_chunks) >= CHECK_INTERVAL:
             self._flush_td_chunks()
+            self._keep_finite_weights()
+
+    # ------------------------------------------------------------------ return scale
+
+    def _track_return_scale(self, rewards: np.ndarray, dones: np.ndarray) -> None:
+        """
+        Fold this step's per-lane discounted returns into ``return_scale``; on its first non-zero value, express
+        the initial Q and V weights in those units (see the class docstring).
+        """
+        lane_returns = self._lane_returns
+        if lane_returns is None or len(lane_returns) != len(rewards):
+            lane_returns = self._lane_returns = np.zeros(len(rewards))
+        lane_returns *= self.gamma
+        lane_returns += rewards
+        self._return_moments += (len(rewards), lane_returns @ lane_returns)
+        lane_returns[dones] = 0.0
+        count, square_sum = self._return_moments
+        scale = math.sqrt(square_sum / count)
+        if scale > 0 and self.return_scale == 0:
+            self.policy.scale_value_outputs(scale)
+        if scale > 0:
+            self.return_scale = scale
+            self._set_return_units()
+
+    def _set_return_units(self) -> None:
+        """The hidden-layer gains of the Q and V approximators for the current ``return_scale``."""
+        unit = self.return_scale if self.return_scale > 0 else 1.0
+        policy = self.policy
+        self._hidden_gain[policy.q_slice] = self._hidden_gain[policy.value_index] = unit**-2
+
+    # ------------------------------------------------------------------ divergence
+
+    def _keep_finite_weights(self) -> None:
+        """Check the weights and keep a copy of them as the last finite ones (restored on divergence)."""
+        self._check_weights()
+        self._finite_weights = {name: p.detach().clone() for name, p in self.policy.approximators.named_parameters()}
+        self._finite_weights_timestep = self.num_timesteps
+
+    def _on_non_finite_outputs(self, batch: np.ndarray) -> None:
+        """Name what made the outputs non-finite, restore the last finite weights, and raise."""
+        self._check_weights()
+        if not np.isfinite(batch).all():
+            raise ValueError(
+                f"The env returned a non-finite (nan or inf) observation by timestep {self.num_timesteps}; "
+                "SarsaAAC needs finite observations (the weights are unchanged)"
+            )
+        self._raise_divergence("the outputs (weights finite, but too large for the observations)")
 
     # ------------------------------------------------------------------ statistics and logging
 
@@ -394,6 +482,11 @@ class SarsaAAC(BaseAlgorithm):
         self._lr = np.zeros(self.policy.value_index + 1)
         self._rows = np.arange(self.n_envs)
         self._td_chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self._hidden_gain = np.ones_like(self._lr)
+        self._set_return_units()
+        self._lane_returns: np.ndarray | None = None
+        self._finite_weights: dict[str, th.Tensor] | None = None
+        self._finite_weights_timestep = 0
         # Sums since the last dump: n, delta, |delta|, delta^2, q_error^2, count(delta > 0); type counts.
         self._train_stats = np.zeros(6)
         self._type_counts = np.zeros(n_types, dtype=np.int64)
@@ -431,8 +524,16 @@ class SarsaAAC(BaseAlgorithm):
             self._raise_divergence("the weights of " + " and ".join(names))
 
     def _raise_divergence(self, what: str) -> None:
+        """Restore the last finite weights and raise a ``FloatingPointError`` saying so."""
+        restored = "the weights were not restored (no finite copy)"
+        if self._finite_weights is not None:
+            with th.no_grad():
+                for name, p in self.policy.approximators.named_parameters():
+                    p.copy_(self._finite_weights[name])
+            restored = f"the weights were restored to those of timestep {self._finite_weights_timestep}, so save() keeps a usable model"
+        self._pending = None  # choose afresh with the restored weights
         raise FloatingPointError(
-            f"SarsaAAC diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}. "
+            f"SarsaAAC diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}; {restored}. "
             f"Lower the learning rates (learning_rate={self.learning_rate}, q_learning_rate={self.q_learning_rate}, "
             f"param_learning_rate={self.param_learning_rate}; normalised rates should be in (0, 1]), lower gamma, "
             "or rescale the rewards; also check that the env returns finite rewards and observations."
