@@ -134,7 +134,7 @@ def test_predict_explores_when_not_deterministic():
         (dict(type_exploration="softmax"), "Unknown type_exploration 'softmax'"),
         (dict(gamma=1.5), "gamma must be in"),
         (dict(exploration_fraction=0.0), "exploration_fraction must be in"),
-        (dict(param_noise_initial=-0.1), "param_noise_initial must be >= 0"),
+        (dict(param_noise_initial=-0.1), "param_noise_initial must be a finite number >= 0"),
         (dict(exploration_initial_eps=2.0), "epsilon-greedy exploration rates must be <= 1"),
     ],
 )
@@ -195,7 +195,8 @@ def test_termination_does_not_bootstrap_truncation_does():
 
 
 def test_divergence_raises_clear_error():
-    model = SarsaAAC("RbfPolicy", OneStepEnv(truncate=False), learning_rate=50.0, seed=0)
+    """Rewards of 1e300 overflow the value scale: the error names the approximators and the remedies."""
+    model = SarsaAAC("RbfPolicy", OneStepEnv(truncate=False, reward=1e300), seed=0)
     with pytest.raises(FloatingPointError, match=r"SarsaAAC diverged: .*critic.* became non-finite .* Lower the learning"):
         model.learn(2000)
 

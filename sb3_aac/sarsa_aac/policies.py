@@ -119,13 +119,17 @@ class SarsaAACPolicy(BasePolicy):
         return self.approximators.evaluate(obs), BankCache(np.empty((len(obs), 0)), None)
 
     def observation_batch(self, observation: np.ndarray) -> tuple[np.ndarray, bool]:
-        """``observation`` as a float64 batch ``(n, *obs_shape)``, and whether it was a batch already."""
+        """
+        ``observation`` as a float64 batch ``(n, *obs_shape)``, and whether it was a batch already.
+
+        :raises ValueError: for a wrong shape, or NaN or inf values
+        """
         obs = np.asarray(observation, dtype=np.float64)
         shape = self.observation_space.shape
-        if obs.shape == shape:
-            return obs.reshape(1, *shape), False
-        if obs.shape[1:] == shape:
-            return obs, True
+        if obs.shape == shape or obs.shape[1:] == shape:
+            if not np.isfinite(obs).all():
+                raise ValueError(f"The observation holds NaN or inf values: {observation}")
+            return (obs.reshape(1, *shape), False) if obs.shape == shape else (obs, True)
         raise ValueError(
             f"Error: Unexpected observation shape {obs.shape} for Box environment, "
             f"please use {shape} or (n_env, {', '.join(map(str, shape))}) for the observation shape."

@@ -80,8 +80,27 @@ class SarsaAAC(BaseAlgorithm):
     training. Executed parameters are clipped to the action space's bounds. Schedules (exploration and learning
     rates) are re-evaluated every 0.1% of training progress rather than at every step.
 
-    Every approximator takes normalised steps (see :mod:`sb3_aac.common.approximators`): a learning rate of 1
-    moves a linear approximator's output onto its target for that sample, so rates lie in ``(0, 1]``.
+    Every approximator takes normalised steps (see :mod:`sb3_aac.common.approximators`): for one sample a learning
+    rate of 1 moves a linear approximator's output onto its target, and for a batch of lanes the summed step is
+    divided by a bound on how much the lanes' steps add up, so any rate in ``(0, 1]`` is stable whatever the number
+    of lanes or features. Rates are validated to lie in ``(0, 1]``.
+
+    Reward units do not matter: ``return_scale`` is the root mean square of the lanes' discounted returns
+    (``G <- gamma * G + r``, reset at episode ends) over all steps so far. When it first becomes non-zero, the
+    initial (random) Q and V weights are multiplied by it, and the hidden layers of the Q and V approximators
+    (MLP heads) take steps divided by ``return_scale**2``, i.e. they learn as if the targets were in units of
+    ``return_scale``; linear heads and output layers are unit-free by construction, and CACLA only reads the sign
+    of ``delta``. So multiplying every reward by ``c > 0`` multiplies Q, V and ``return_scale`` by ``c`` and
+    leaves every decision unchanged (up to rounding). The Boltzmann temperature is in units of ``return_scale``.
+
+    Divergence: every forward pass of training is checked for non-finite outputs before an action is chosen
+    from it, and the weights are checked every ``CHECK_INTERVAL`` steps, when a copy of them is kept. On a
+    non-finite value the weights are restored to that copy and a ``FloatingPointError`` names the approximators;
+    ``save`` after it saves a usable model.
+
+    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; then
+    ``actions`` in the callbacks' locals is the pair (types, scaled parameters) and ``infos`` holds dicts only for
+    the lanes whose episode ended. Other envs are stepped with SB3's ``env.step``.
     All updates are closed-form numpy on the CPU, vectorised over environments; ``device`` only says where the
     parameters are stored between ``learn()`` calls. Callbacks run after ``env.step`` and before that step's
     update.
@@ -91,12 +110,12 @@ class SarsaAAC(BaseAlgorithm):
     :param policy: The policy model to use (MlpPolicy, RbfMlpPolicy, RbfPolicy)
     :param env: The environment to learn from (if registered in Gym, can be str)
     :param learning_rate: Critic learning rate (normalised, in ``(0, 1]``), or a schedule of the progress
-        remaining (from 1 to 0)
+        remaining (from 1 to 0) whose values at 1 and 0 are in ``(0, 1]``
     :param q_learning_rate: Action-type actor learning rate, or a schedule
     :param param_learning_rate: Parameter actor learning rate, or a schedule
     :param gamma: The discount factor
     :param type_exploration: ``"epsilon_greedy"``, or ``"boltzmann"`` (softmax over Q with temperature given by
-        the exploration schedule, in units of Q)
+        the exploration schedule, in units of ``return_scale``)
     :param exploration_fraction: Fraction of the training period over which the exploration rate and the
         parameter noise decay
     :param exploration_initial_eps: Initial epsilon (or temperature for Boltzmann exploration)
@@ -174,20 +193,33 @@ class SarsaAAC(BaseAlgorithm):
         self.exploration_final_eps = exploration_final_eps
         self.param_noise_initial = param_noise_initial
         self.param_noise_final = param_noise_final
+        if isinstance(info_keywords, str) or not all(isinstance(key, str) for key in info_keywords):
+            raise ValueError(
+                f"info_keywords must be a tuple of info keys (str), got {info_keywords!r}; "
+                f"for one key write ({info_keywords!r},)"
+            )
         self.info_keywords = tuple(info_keywords)
         if _init_setup_model:
             self._setup_model()
 
     def _check_hyperparameters(self) -> None:
+        for name in ("learning_rate", "q_learning_rate", "param_learning_rate"):
+            rate = getattr(self, name)
+            values = (rate(1.0), rate(0.0)) if callable(rate) else (rate,)
+            if not all(isinstance(v, (int, float, np.floating)) and 0 < v <= 1 for v in values):
+                raise ValueError(
+                    f"{name} must be in (0, 1] (a normalised step; 1 lands one sample on its target), got "
+                    f"{values[0] if len(values) == 1 else f'a schedule from {values[0]} to {values[1]}'}"
+                )
         if self.type_exploration not in TYPE_EXPLORATIONS:
             raise ValueError(f"Unknown type_exploration {self.type_exploration!r}, valid values: {list(TYPE_EXPLORATIONS)}")
-        if not 0 <= self.gamma <= 1:
+        if not (isinstance(self.gamma, (int, float, np.floating)) and 0 <= self.gamma <= 1):
             raise ValueError(f"gamma must be in [0, 1], got {self.gamma}")
         if not 0 < self.exploration_fraction <= 1:
             raise ValueError(f"exploration_fraction must be in (0, 1], got {self.exploration_fraction}")
         for name in ("exploration_initial_eps", "exploration_final_eps", "param_noise_initial", "param_noise_final"):
-            if not getattr(self, name) >= 0:
-                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+            if not (isinstance(getattr(self, name), (int, float, np.floating)) and 0 <= getattr(self, name) < math.inf):
+                raise ValueError(f"{name} must be a finite number >= 0, got {getattr(self, name)!r}")
         if self.type_exploration == "epsilon_greedy" and max(self.exploration_initial_eps, self.exploration_final_eps) > 1:
             raise ValueError("epsilon-greedy exploration rates must be <= 1")
 
@@ -393,6 +425,9 @@ class SarsaAAC(BaseAlgorithm):
             batch = np.concatenate((obs, next_obs, terminal_obs))
         else:
             batch = np.concatenate((obs, next_obs))
+        rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
+        # Before the forward pass: it may put the weights into return units.
+        self._track_return_scale(rewards, dones)
         # One forward pass for s (weights as they are now), s' and the terminal observations.
         out, cache = kernel.forward(batch)
         if not math.isfinite(out.sum()):  # one reduction catches NaN and inf before an action is chosen from them
@@ -407,8 +442,6 @@ class SarsaAAC(BaseAlgorithm):
             q_next[truncated] = terminal[np.arange(len(truncated)), self._explore(terminal)[0]]
             discount[truncated] = gamma
 
-        rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
-        self._track_return_scale(rewards, dones)
         delta = rewards + discount * v_next - current[:, vi]
         q_error = rewards + discount * q_next - current[rows, k]
         err = np.zeros_like(current)
