@@ -45,7 +45,16 @@ ARRAY_DTYPE = "<f8"  # every array: little-endian IEEE-754 float64, C order
 
 BANK_ARRAYS = ("obs_mid", "obs_half", "rbf_centers", "rbf_widths", "weight", "bias", "weight1", "bias1", "weight2", "bias2")
 
-__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "MAGIC", "BankForward", "RuntimePolicy", "expected_array_shapes", "read_policy_file"]
+__all__ = [
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "MAGIC",
+    "BankForward",
+    "RuntimePolicy",
+    "TileForward",
+    "expected_array_shapes",
+    "read_policy_file",
+]
 
 
 class BankForward:
@@ -117,6 +126,60 @@ class BankForward:
             return pre, None
         hidden = np.tanh(pre, out=pre).reshape(*phi.shape[:-1], *self.w2.shape)
         return (hidden * self.w2).sum(-1) + self.b2, hidden
+
+
+class TileForward:
+    """
+    The forward pass of a bank of ``A`` linear approximators on tile-coding features: the only implementation
+    of these formulas (training subclasses it, :class:`sb3_aac.common.tile_coding.TileKernel`).
+
+    ``C`` codings (one per group of inputs and tiling) each activate exactly one binary feature. Coding ``c``
+    reads the inputs ``tile_inputs[c]`` (``k`` per coding; a padded slot has stride 0), scales each to
+    ``[-1, 1]`` with ``obs_mid`` / ``obs_half``, and takes the tile coordinate
+    ``clip(floor((s~ + 1) / 2 * tile_resolution + tile_offsets), 0, tile_resolution)`` per input; its active feature
+    is ``tile_bases[c] + sum_j coordinate_j * tile_strides[c, j]``. The output of approximator ``a`` is
+    ``sum_c tile_weight[active_c, a] + bias[a]``, so one evaluation costs ``O(C * A)`` whatever the table size.
+
+    The arguments are the arrays of the export format: ``obs_mid``, ``obs_half`` ``(D,)``; ``tile_inputs``,
+    ``tile_offsets``, ``tile_resolution``, ``tile_strides`` ``(C, k)``; ``tile_bases`` ``(C,)``; ``tile_weight``
+    ``(F, A)``; ``bias`` ``(A,)``. Index arrays may be given as float64 (as files store them). The weights are held
+    as given (views), so in-place updates are seen by the next call.
+    """
+
+    def __init__(
+        self,
+        obs_mid: np.ndarray,
+        obs_half: np.ndarray,
+        tile_inputs: np.ndarray,
+        tile_offsets: np.ndarray,
+        tile_resolution: np.ndarray,
+        tile_strides: np.ndarray,
+        tile_bases: np.ndarray,
+        tile_weight: np.ndarray,
+        bias: np.ndarray,
+    ):
+        self.inputs = np.asarray(tile_inputs).astype(np.int64)
+        half = np.asarray(obs_half, dtype=np.float64)[self.inputs]
+        mid = np.asarray(obs_mid, dtype=np.float64)[self.inputs]
+        resolution = np.asarray(tile_resolution, dtype=np.float64)
+        # (s - mid) / half * res / 2 + res / 2 + offset = s * a - b
+        self.tile_a = resolution / (2 * half)
+        self.tile_b = mid * self.tile_a - resolution / 2 - np.asarray(tile_offsets, dtype=np.float64)
+        self.limit = resolution
+        self.strides = np.asarray(tile_strides).astype(np.int64)
+        self.bases = np.asarray(tile_bases).astype(np.int64)
+        self.w, self.b = tile_weight, bias
+
+    def features(self, obs: np.ndarray) -> np.ndarray:
+        """Observations ``(n, D)`` -> the active feature of every coding, ``(n, C)`` int64."""
+        position = obs[:, self.inputs] * self.tile_a - self.tile_b  # (n, C, k)
+        np.floor(position, out=position)
+        np.clip(position, 0.0, self.limit, out=position)
+        return np.einsum("nck,ck->nc", position.astype(np.int64), self.strides) + self.bases
+
+    def outputs(self, active: np.ndarray) -> tuple[np.ndarray, None]:
+        """Active features ``(n, C)`` -> every output ``(n, A)`` (and None: there is no hidden layer)."""
+        return self.w[active].sum(1) + self.b, None
 
 
 def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:

@@ -40,7 +40,7 @@ torch op runs per step. ``ApproximatorBank.forward`` runs the same numpy code an
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import torch as th
@@ -48,10 +48,9 @@ from torch import nn
 
 from sb3_aac.runtime import BankForward
 
-
-def _uniform(shape: tuple[int, ...], bound: float) -> nn.Parameter:
-    # Weights are updated by hand (no autograd); float64 keeps many tiny online steps accurate.
-    return nn.Parameter(th.empty(shape, dtype=th.float64).uniform_(-bound, bound), requires_grad=False)
+if TYPE_CHECKING:
+    from sb3_aac.common.tile_coding import TileKernel
+    from sb3_aac.runtime import TileForward
 
 
 def rbf_layout(n_inputs: int, n_rbf: int, rbf_width: float) -> tuple[np.ndarray, np.ndarray]:
@@ -76,7 +75,92 @@ class BankCache(NamedTuple):
     hidden: np.ndarray | None  # (n, A, H) tanh activations, None for a linear head
 
 
-class ApproximatorBank(nn.Module):
+class NumpyBank(nn.Module):
+    """
+    What every bank of approximators shares: parameters as float64 torch tensors (for SB3's save/load), and a numpy
+    kernel on zero-copy views of them, built once and cached. Subclasses build the kernel and the forward pass.
+    """
+
+    # Axis of the outputs (approximators) in each parameter, where it is not 0.
+    output_axes: dict[str, int] = {}  # noqa: RUF012
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._kernel: BankKernel | TileKernel | None = None
+        # load_state_dict copies in place, but the kernel's constants derived from the buffers would go stale.
+        self.register_load_state_dict_post_hook(lambda module, incompatible_keys: module.invalidate_kernel())
+
+    @staticmethod
+    def _uniform(shape: tuple[int, ...], bound: float) -> nn.Parameter:
+        # Weights are updated by hand (no autograd); float64 keeps many tiny online steps accurate.
+        return nn.Parameter(th.empty(shape, dtype=th.float64).uniform_(-bound, bound), requires_grad=False)
+
+    def _make_kernel(self) -> BankKernel | TileKernel:
+        raise NotImplementedError
+
+    def _forward_pass(self) -> BankForward | TileForward:
+        raise NotImplementedError
+
+    def _output_weights(self) -> tuple[th.Tensor, th.Tensor, int]:
+        """The output layer's weight, its bias, and the axis of the outputs in the weight."""
+        raise NotImplementedError
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """
+        The buffers and parameters by name (the names of the forward pass and of the export format) as numpy
+        arrays: zero-copy views of CPU storage, copies from another device.
+        """
+        return {name: t.detach().cpu().numpy() for name, t in (*self.named_buffers(), *self.named_parameters())}
+
+    def evaluate(self, obs: np.ndarray) -> np.ndarray:
+        """Every approximator's output ``(n, A)`` for ``obs`` ``(n, D)``, with numpy (on CPU copies if stored elsewhere)."""
+        bank = self.numpy_kernel() if self.obs_mid.device.type == "cpu" else self._forward_pass()
+        return bank.outputs(bank.features(obs))[0]
+
+    def forward(self, obs: th.Tensor) -> th.Tensor:
+        """:meth:`evaluate` for a tensor ``(n, D)``: a float64 tensor ``(n, A)`` on ``obs``'s device (no autograd)."""
+        return th.as_tensor(self.evaluate(obs.detach().cpu().numpy()), device=obs.device)
+
+    def numpy_kernel(self) -> BankKernel | TileKernel:
+        """
+        Numpy evaluation and update on zero-copy views of the (CPU) parameters, built once and cached.
+
+        The cache is dropped on device/dtype moves and after ``load_state_dict``; after assigning a tensor's
+        ``.data`` directly, call :meth:`invalidate_kernel`.
+        """
+        if self._kernel is None:
+            self._kernel = self._make_kernel()
+        return self._kernel
+
+    def invalidate_kernel(self) -> None:
+        self._kernel = None
+
+    def scale_outputs(self, outputs: list[int], factor: float) -> None:
+        """Multiply the given approximators' outputs by ``factor`` (their output layer's weights and bias)."""
+        weight, bias, axis = self._output_weights()
+        with th.no_grad():
+            th.movedim(weight, axis, 0)[outputs] *= factor  # a view: writes into the weight's storage
+            bias[outputs] *= factor
+
+    def finite_outputs(self) -> np.ndarray:
+        """``(A,)`` bool: whether every parameter of each approximator is finite."""
+        finite = np.ones(self.n_outputs, dtype=bool)
+        for name, p in self.named_parameters():
+            array = np.moveaxis(p.detach().cpu().numpy(), self.output_axes.get(name, 0), 0)
+            finite &= np.isfinite(array.reshape(self.n_outputs, -1)).all(1)
+        return finite
+
+    def __getstate__(self) -> dict:
+        # A copy (deepcopy, pickle) gets new storage, so it must not inherit views of ours.
+        return {**self.__dict__, "_kernel": None}  # not super(): object.__getstate__ is Python 3.11+
+
+    def _apply(self, fn, recurse=True):  # type: ignore[no-untyped-def]
+        # Device and dtype moves replace the storage the numpy views point to.
+        self._kernel = None
+        return super()._apply(fn, recurse)
+
+
+class ApproximatorBank(NumpyBank):
     """
     ``n_outputs`` independent function approximators of one observation vector (see the module docstring).
 
@@ -122,56 +206,23 @@ class ApproximatorBank(nn.Module):
         f, a = self.n_features, n_outputs
         # Fan-in scaled uniform initialisation, like torch.nn.Linear (the paper only says "at random").
         if hidden_units is None:
-            self.weight = _uniform((a, f), 1 / math.sqrt(f))
-            self.bias = _uniform((a,), 1 / math.sqrt(f))
+            self.weight = self._uniform((a, f), 1 / math.sqrt(f))
+            self.bias = self._uniform((a,), 1 / math.sqrt(f))
         else:
             h = hidden_units
-            self.weight1 = _uniform((a, h, f), 1 / math.sqrt(f))
-            self.bias1 = _uniform((a, h), 1 / math.sqrt(f))
-            self.weight2 = _uniform((a, h), 1 / math.sqrt(h))
-            self.bias2 = _uniform((a,), 1 / math.sqrt(h))
-        self._kernel: BankKernel | None = None
-        # load_state_dict copies in place, but the kernel's constants derived from the buffers would go stale.
-        self.register_load_state_dict_post_hook(lambda module, incompatible_keys: module.invalidate_kernel())
+            self.weight1 = self._uniform((a, h, f), 1 / math.sqrt(f))
+            self.bias1 = self._uniform((a, h), 1 / math.sqrt(f))
+            self.weight2 = self._uniform((a, h), 1 / math.sqrt(h))
+            self.bias2 = self._uniform((a,), 1 / math.sqrt(h))
 
-    def arrays(self) -> dict[str, np.ndarray]:
-        """
-        The buffers and parameters by name (the names :class:`~sb3_aac.runtime.BankForward` and the export format
-        use) as numpy arrays: zero-copy views of CPU storage, copies from another device.
-        """
-        return {name: t.detach().cpu().numpy() for name, t in (*self.named_buffers(), *self.named_parameters())}
+    def _make_kernel(self) -> BankKernel:
+        return BankKernel(self)
 
-    def evaluate(self, obs: np.ndarray) -> np.ndarray:
-        """Every approximator's output ``(n, A)`` for ``obs`` ``(n, D)``, with numpy (on CPU copies if stored elsewhere)."""
-        bank = self.numpy_kernel() if self.obs_mid.device.type == "cpu" else BankForward(**self.arrays())
-        return bank.outputs(bank.features(obs))[0]
+    def _forward_pass(self) -> BankForward:
+        return BankForward(**self.arrays())
 
-    def forward(self, obs: th.Tensor) -> th.Tensor:
-        """:meth:`evaluate` for a tensor ``(n, D)``: a float64 tensor ``(n, A)`` on ``obs``'s device (no autograd)."""
-        return th.as_tensor(self.evaluate(obs.detach().cpu().numpy()), device=obs.device)
-
-    def numpy_kernel(self) -> BankKernel:
-        """
-        Numpy evaluation and update on zero-copy views of the (CPU) parameters, built once and cached.
-
-        The cache is dropped on device/dtype moves and after ``load_state_dict``; after assigning a tensor's
-        ``.data`` directly, call :meth:`invalidate_kernel`.
-        """
-        if self._kernel is None:
-            self._kernel = BankKernel(self)
-        return self._kernel
-
-    def invalidate_kernel(self) -> None:
-        self._kernel = None
-
-    def __getstate__(self) -> dict:
-        # A copy (deepcopy, pickle) gets new storage, so it must not inherit views of ours.
-        return {**self.__dict__, "_kernel": None}  # not super(): object.__getstate__ is Python 3.11+
-
-    def _apply(self, fn, recurse=True):  # type: ignore[no-untyped-def]
-        # Device and dtype moves replace the storage the numpy views point to.
-        self._kernel = None
-        return super()._apply(fn, recurse)
+    def _output_weights(self) -> tuple[th.Tensor, th.Tensor, int]:
+        return (self.weight, self.bias, 0) if self.hidden_units is None else (self.weight2, self.bias2, 0)
 
 
 class BankKernel(BankForward):

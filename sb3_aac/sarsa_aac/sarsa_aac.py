@@ -17,7 +17,7 @@ from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedul
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
 from sb3_aac.common.array_env import array_path
-from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy
+from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
 # The info of a lane whose episode goes on, on the array path (read-only, shared by those lanes).
@@ -139,6 +139,7 @@ class SarsaAAC(BaseAlgorithm):
         "MlpPolicy": MlpPolicy,
         "RbfMlpPolicy": RbfMlpPolicy,
         "RbfPolicy": RbfPolicy,
+        "TilePolicy": TilePolicy,
     }
     policy: SarsaAACPolicy
 
@@ -540,11 +541,7 @@ class SarsaAAC(BaseAlgorithm):
         self._type_counts += np.bincount(k, minlength=len(self._type_counts))
 
     def _check_weights(self) -> None:
-        arrays = [p.detach().cpu().numpy() for p in self.policy.approximators.parameters()]
-        n_outputs = self.policy.value_index + 1
-        finite = np.ones(n_outputs, dtype=bool)
-        for array in arrays:
-            finite &= np.isfinite(array.reshape(n_outputs, -1)).all(1)
+        finite = self.policy.approximators.finite_outputs()
         if not finite.all():
             policy = self.policy
             names = []
