@@ -44,6 +44,7 @@ PARAM_DTYPES = ("float16", "float32", "float64")
 ARRAY_DTYPE = "<f8"  # every array: little-endian IEEE-754 float64, C order
 
 BANK_ARRAYS = ("obs_mid", "obs_half", "rbf_centers", "rbf_widths", "weight", "bias", "weight1", "bias1", "weight2", "bias2")
+TILE_ARRAYS = ("obs_mid", "obs_half", "tile_inputs", "tile_offsets", "tile_resolution", "tile_strides", "tile_bases", "tile_weight", "bias")
 
 __all__ = [
     "FORMAT_NAME",
@@ -199,12 +200,29 @@ def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
     if approx["features"]["type"] == "rbf":
         m = approx["features"]["n_rbf"]
         shapes["rbf_centers"] = shapes["rbf_widths"] = (d, m)
-    if approx["head"]["type"] == "linear":
+    if approx["features"]["type"] == "tiles":
+        c, k = approx["features"]["n_codings"], approx["features"]["group_size"]
+        shapes.update(tile_inputs=(c, k), tile_offsets=(c, k), tile_resolution=(c, k), tile_strides=(c, k), tile_bases=(c,))
+        shapes.update(tile_weight=(f, a), bias=(a,))
+    elif approx["head"]["type"] == "linear":
         shapes.update(weight=(a, f), bias=(a,))
     else:
         h = approx["head"]["hidden_units"]
         shapes.update(weight1=(a, h, f), bias1=(a, h), weight2=(a, h), bias2=(a,))
     return shapes
+
+
+def _check_tile_arrays(arrays: dict[str, np.ndarray], n_inputs: int, n_features: int, path: Any) -> None:
+    """Tile-coding index arrays: whole numbers, inputs in range, and every reachable feature inside the table."""
+    inputs, resolution = arrays["tile_inputs"], arrays["tile_resolution"]
+    strides, bases = arrays["tile_strides"], arrays["tile_bases"]
+    for name in ("tile_inputs", "tile_resolution", "tile_strides", "tile_bases"):
+        if not (np.floor(arrays[name]) == arrays[name]).all() or (arrays[name] < 0).any():
+            raise _fail(path, f"array {name!r} must hold whole numbers >= 0")
+    if (inputs >= n_inputs).any() or (resolution < 1).any():
+        raise _fail(path, f"tile_inputs must be < {n_inputs} and tile_resolution >= 1")
+    if (bases + (resolution * strides).sum(1)).max() >= n_features:
+        raise _fail(path, f"the tile grids reach past the {n_features} features of the table")
 
 
 def _fail(path: Any, why: str) -> ValueError:
@@ -246,8 +264,11 @@ def _check_header(header: Any, path: Any) -> None:
         elif features["type"] == "scaled":
             if features["n_features"] != d:
                 raise _fail(path, f"scaled features: n_features={features['n_features']!r} for {d} inputs")
+        elif features["type"] == "tiles":
+            if not all(_positive_int(features[key]) for key in ("n_codings", "group_size", "n_features")) or head["type"] != "linear":
+                raise _fail(path, f"tile features need positive n_codings, group_size, n_features and a linear head, got {features!r}, head {head!r}")
         else:
-            raise _fail(path, f"unknown feature type {features['type']!r} (known: 'rbf', 'scaled')")
+            raise _fail(path, f"unknown feature type {features['type']!r} (known: 'rbf', 'scaled', 'tiles')")
         if head["type"] == "tanh_mlp":
             if not _positive_int(head["hidden_units"]):
                 raise _fail(path, f"hidden_units={head['hidden_units']!r}")
@@ -447,15 +468,24 @@ class RuntimePolicy:
 
         if "rbf_widths" in arrays and not (arrays["rbf_widths"] > 0).all():
             raise _fail(path, "rbf_widths must be > 0 everywhere")
-        self._bank = bank = BankForward(**{name: arrays[name] for name in BANK_ARRAYS if name in arrays})
-        self.rbf, self.mlp = bank.rbf, bank.mlp
+        self.tiles = approx["features"]["type"] == "tiles"
         self.hidden_units = approx["head"].get("hidden_units")
         k = self.n_types
         self._p_slice = slice(k, k + self.n_params)
         # Per type: its parameter bounds as Python floats.
         self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in map(self.type_slice, range(k))]
-        self._feature_buffer = np.empty(bank.feature_a.shape)  # (D,) or (D, m), reused by act()
         self._kernel_args: tuple | None = None
+        if self.tiles:
+            _check_tile_arrays(arrays, self.obs_size, approx["features"]["n_features"], path)
+            if backend == "numba":
+                raise ValueError("backend='numba' computes dense features only; tile-coding policies run with numpy ('auto')")
+            self._bank: BankForward | TileForward = TileForward(**{name: arrays[name] for name in TILE_ARRAYS})
+            self.rbf = self.mlp = False
+            self.backend = "numpy"
+            return
+        self._bank = bank = BankForward(**{name: arrays[name] for name in BANK_ARRAYS if name in arrays})
+        self.rbf, self.mlp = bank.rbf, bank.mlp
+        self._feature_buffer = np.empty(bank.feature_a.shape)  # (D,) or (D, m), reused by act()
         if backend != "numpy":
             kernel = _act_kernel()
             if kernel is None and backend == "numba":
@@ -534,10 +564,13 @@ class RuntimePolicy:
             if k < 0:
                 raise ValueError(f"The observation holds NaN or inf values: {x}")
             return self.type_start + k, self._kernel_args[-1][:dim].astype(self.param_dtypes[k])
-        phi = self._bank.features(self._observation(obs), out=self._feature_buffer)
-        # Every output at once: with numpy, one matrix-vector product costs less than separate calls for Q and
-        # for the chosen type's parameters (a C++ runtime would compute only those, see docs/export-format.md).
-        out = self._bank.outputs(phi)[0].tolist()
+        if self.tiles:
+            out = self._bank.outputs(self._bank.features(self._observation(obs)[None]))[0][0].tolist()
+        else:
+            phi = self._bank.features(self._observation(obs), out=self._feature_buffer)
+            # Every output at once: with numpy, one matrix-vector product costs less than separate calls for Q and
+            # for the chosen type's parameters (a C++ runtime would compute only those, see docs/export-format.md).
+            out = self._bank.outputs(phi)[0].tolist()
         q = out[: self.n_types]
         k = q.index(max(q))  # the first maximum, like numpy's argmax
         # Unscale in Python floats: the same IEEE operations as unscale(), cheaper on a few values.

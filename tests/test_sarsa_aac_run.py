@@ -6,7 +6,7 @@ from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-from sb3_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC
+from sb3_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, TilePolicy
 from sb3_aac.common.envs import ParameterizedTargetEnv
 from sb3_aac.sarsa_aac.sarsa_aac import select_types
 from tests.helpers import LAYOUTS, POLICIES, OneStepEnv
@@ -30,7 +30,12 @@ def test_run(policy, layout):
 
 
 def test_policy_aliases_and_classes():
-    assert SarsaAAC.policy_aliases == {"MlpPolicy": MlpPolicy, "RbfMlpPolicy": RbfMlpPolicy, "RbfPolicy": RbfPolicy}
+    assert SarsaAAC.policy_aliases == {
+        "MlpPolicy": MlpPolicy,
+        "RbfMlpPolicy": RbfMlpPolicy,
+        "RbfPolicy": RbfPolicy,
+        "TilePolicy": TilePolicy,
+    }
     model = SarsaAAC(RbfPolicy, ParameterizedTargetEnv(), seed=0)
     assert isinstance(model.policy, RbfPolicy)
     with pytest.raises(ValueError, match="Policy CnnPolicy unknown"):
@@ -45,6 +50,9 @@ def test_policy_aliases_and_classes():
         ("RbfMlpPolicy", dict(hidden_units=2, n_rbf=5), 10, 2),
         ("RbfPolicy", dict(n_rbf=30), 60, None),
         ("RbfPolicy", dict(n_rbf=50, rbf_width=0.5, obs_bounds=([-2, -2], [2, 2])), 100, None),
+        # Inputs 0, 1 and the pair, 8 tilings: (9 + 9 + 81) * 8 features.
+        ("TilePolicy", dict(), 792, None),
+        ("TilePolicy", dict(tile_groups=[(0, 1)], tiles_per_input=4, n_tilings=2), 50, None),
     ],
 )
 def test_policy_kwargs(policy, policy_kwargs, n_features, hidden):

@@ -25,10 +25,10 @@ for a batch of ``n`` samples (one per environment) at once:
 - per sample, each layer's step is divided by ``1 + ||input of that layer||**2`` (normalised LMS). For one sample
   and a linear head a learning rate of 1 moves the output all the way to its target, whatever the number of
   features, so the default rates work for 10, 30 or 50 RBFs per input alike;
-- the batch's summed steps are divided by a factor that bounds how much the samples' steps add up along shared
-  directions (:func:`step_normalisers`): 1 for one sample and for samples whose features do not overlap, ``n``
-  for ``n`` identical samples, and separately for the weights and the bias, which every sample shares. So the
-  summed step of each block is non-expansive for any rate in ``(0, 1]`` whatever the number of lanes.
+- the batch's summed steps are divided by factors that bound how much the samples' steps add up along shared
+  directions (:func:`step_normalisers`), for the weights and for the bias (which every sample shares) apart:
+  1 for one sample, ``n`` for ``n`` identical samples, and for the weights 1 when the samples' features do not
+  overlap. So the summed step is non-expansive for any rate in ``(0, 1]`` whatever the number of lanes.
 
 The parameters are torch tensors (so SB3's ``state_dict``-based save/load keeps working), but every computation is
 numpy on the CPU: the forward pass is :class:`sb3_aac.runtime.BankForward`, the one implementation of the formulas
@@ -282,11 +282,17 @@ def step_normalisers(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     For inputs ``x`` ``(n, ..., F)`` (one layer input per sample, and per approximator if there are middle axes),
     with ``w_i = 1 / (1 + ||x_i||**2)`` (normalised LMS), the weight step of sample ``i`` is scaled by
-    ``w_i / c_w`` and its bias step by ``w_i / c_b``, where
-    ``c_w = max(1, max_i sqrt(w_i) |x_i| . sum_j sqrt(w_j) |x_j|)`` and ``c_b = max(1, sum_j w_j)``.
-    ``c_w`` is Gershgorin's bound on the largest eigenvalue of the batch's normalised Gram matrix
-    ``sqrt(w_i w_j) x_i . x_j`` (``c_b`` is that eigenvalue for the bias's constant input), so each block's
-    summed step is non-expansive for rates in ``(0, 1]`` whatever ``n`` and ``F``. For one sample both are 1.
+    ``w_i / c_w`` and its bias step by ``w_i / c_b``, where, with ``alpha = mean_i w_i ||x_i||**2`` (the weights'
+    share of a single sample's step; the bias has the rest, ``w_i``),
+
+    - ``c_w = max(1, G_w / alpha)``, ``G_w = max_i sqrt(w_i) |x_i| . sum_j sqrt(w_j) |x_j|``: Gershgorin's bound on
+      the largest eigenvalue of the batch's normalised Gram matrix ``sqrt(w_i w_j) x_i . x_j``;
+    - ``c_b = max(1, sum_j w_j / (1 - alpha))``: that eigenvalue for the bias's constant input.
+
+    The largest eigenvalue of the whole batch step is then at most ``alpha + (1 - alpha) = 1`` times the rate, so
+    the summed step is non-expansive for rates in ``(0, 1]`` whatever ``n`` and ``F``. For one sample both factors
+    are 1 (plain normalised LMS); ``n`` identical samples are averaged; samples with disjoint features keep their
+    own weight steps, and share the bias's.
 
     :return: weight factors and bias factors, each of shape ``x.shape[:-1]``
     """
@@ -295,6 +301,7 @@ def step_normalisers(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     root = np.sqrt(w)
     scaled = np.abs(x) * root[..., None]
     gram_row_sums = np.einsum("n...f,...f->n...", scaled, scaled.sum(0))
-    weight_batch = np.maximum(gram_row_sums.max(0), 1.0)
-    bias_batch = np.maximum(w.sum(0), 1.0)
+    alpha = (w * energy).mean(0)
+    weight_batch = np.maximum(np.divide(gram_row_sums.max(0), alpha, out=np.ones_like(alpha), where=alpha > 0), 1.0)
+    bias_batch = np.maximum(w.sum(0) / (1.0 - alpha), 1.0)
     return w / weight_batch, w / bias_batch
