@@ -90,3 +90,17 @@ def test_save_load_keeps_the_grid(tmp_path):
     obs = np.random.default_rng(0).uniform(-1, 1, (100, 2))
     np.testing.assert_array_equal(loaded.policy.evaluate(obs)[0], model.policy.evaluate(obs)[0])
     assert loaded.policy.approximators.tile_inputs.dtype == th.int64
+
+
+def test_compiled_training_pass_equals_the_runtime_forward_pass():
+    """Training's numba loops give the very tiles and outputs of runtime.TileForward (numpy), on 5,000 observations."""
+    from sb3_aac.runtime import TileForward
+
+    bank = TileBank(np.array([-1.0, 0.0, -5.0]), np.array([1.0, 2.0, 5.0]), 4)
+    with th.no_grad():
+        bank.tile_weight.normal_()
+    kernel = bank.numpy_kernel()
+    reference = TileForward(**bank.arrays())
+    obs = np.random.default_rng(2).uniform([-1.5, -0.5, -6.0], [1.5, 2.5, 6.0], (5000, 3))
+    np.testing.assert_array_equal(kernel.features(obs), reference.features(obs))
+    np.testing.assert_array_equal(kernel.forward(obs)[0], reference.outputs(reference.features(obs))[0])

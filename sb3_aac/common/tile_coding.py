@@ -26,6 +26,7 @@ import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
+import numba
 import numpy as np
 import torch as th
 from torch import nn
@@ -151,14 +152,88 @@ class TileCache(NamedTuple):
     hidden: None
 
 
+@numba.njit(cache=True, nogil=True)
+def _active_features(obs, inputs, tile_a, tile_b, limit, strides, bases):  # type: ignore[no-untyped-def]
+    """:meth:`TileForward.features` as loops (the same float operations, so the same tiles)."""
+    n, (c_count, k) = len(obs), inputs.shape
+    active = np.empty((n, c_count), dtype=np.int64)
+    for i in range(n):
+        for c in range(c_count):
+            index = bases[c]
+            for j in range(k):
+                position = obs[i, inputs[c, j]] * tile_a[c, j] - tile_b[c, j]
+                position = min(max(math.floor(position), 0.0), limit[c, j])
+                index += np.int64(position) * strides[c, j]
+            active[i, c] = index
+    return active
+
+
+@numba.njit(cache=True, nogil=True)
+def _outputs(active, w, b):  # type: ignore[no-untyped-def]
+    """:meth:`TileForward.outputs` as loops (summed in the same order as numpy's ``w[active].sum(1) + b``)."""
+    n, c_count = active.shape
+    a_count = w.shape[1]
+    out = np.zeros((n, a_count))
+    for i in range(n):
+        for c in range(c_count):
+            row = active[i, c]
+            for a in range(a_count):
+                out[i, a] += w[row, a]
+        for a in range(a_count):
+            out[i, a] += b[a]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _largest_overlap(active, counts):  # type: ignore[no-untyped-def]
+    """``max_i sum_{f active in i} n_f`` (``n_f``: samples in which ``f`` is active); ``counts`` is left zero."""
+    n, c_count = active.shape
+    for i in range(n):
+        for c in range(c_count):
+            counts[active[i, c]] += 1
+    largest = 0
+    for i in range(n):
+        overlap = 0
+        for c in range(c_count):
+            overlap += counts[active[i, c]]
+        largest = max(largest, overlap)
+    for i in range(n):
+        for c in range(c_count):
+            counts[active[i, c]] = 0
+    return largest
+
+
+@numba.njit(cache=True, nogil=True)
+def _add_rows(w, active, steps):  # type: ignore[no-untyped-def]
+    """``w[active[i, c]] += steps[i]`` for every ``i``, ``c`` (repeated features add up)."""
+    n, c_count = active.shape
+    for i in range(n):
+        for c in range(c_count):
+            row = active[i, c]
+            for a in range(w.shape[1]):
+                w[row, a] += steps[i, a]
+
+
 class TileKernel(TileForward):
-    """The tile forward pass on views of a :class:`TileBank`'s CPU parameters, with the closed-form update."""
+    """
+    The tile forward pass on views of a :class:`TileBank`'s CPU parameters, with the closed-form update.
+
+    Training runs :class:`~sb3_aac.runtime.TileForward`'s formulas compiled with numba (the same float operations
+    and summation order, so the same outputs; tested against the numpy forward pass).
+    """
 
     def __init__(self, bank: TileBank):
         if bank.obs_mid.device.type != "cpu":
             raise ValueError(f"The numpy kernel needs CPU tensors, the bank is on {bank.obs_mid.device}")
         super().__init__(**bank.arrays())
         self.n_features = bank.n_features
+        self._counts = np.zeros(bank.n_features, dtype=np.int64)
+
+    def features(self, obs: np.ndarray) -> np.ndarray:
+        return _active_features(np.ascontiguousarray(obs, dtype=np.float64), self.inputs, self.tile_a, self.tile_b, self.limit, self.strides, self.bases)
+
+    def outputs(self, active: np.ndarray) -> tuple[np.ndarray, None]:
+        return _outputs(active, self.w, self.b), None
 
     def forward(self, obs: np.ndarray) -> tuple[np.ndarray, TileCache]:
         """``obs``: ``(n, D)`` -> outputs ``(n, A)`` and the cache for :meth:`update`."""
@@ -174,9 +249,8 @@ class TileKernel(TileForward):
         active = cache.x[:n]
         c = active.shape[1]
         w = 1.0 / (1.0 + c)
-        counts = np.bincount(active.ravel(), minlength=self.n_features)
         # alpha = w * c: G_w / alpha = max_i overlap_i / c; sum_j w / (1 - alpha) = n.
-        weight_batch = max(1.0, counts[active].sum(1).max() / c)
+        weight_batch = max(1.0, _largest_overlap(active, self._counts) / c)
         g = err * lr
-        np.add.at(self.w, active, (g * (w / weight_batch))[:, None, :])
+        _add_rows(self.w, active, g * (w / weight_batch))
         self.b += g.sum(0) * (w / max(1.0, n))
