@@ -44,7 +44,10 @@ PARAM_DTYPES = ("float16", "float32", "float64")
 ARRAY_DTYPE = "<f8"  # every array: little-endian IEEE-754 float64, C order
 
 BANK_ARRAYS = ("obs_mid", "obs_half", "rbf_centers", "rbf_widths", "weight", "bias", "weight1", "bias1", "weight2", "bias2")
-TILE_ARRAYS = ("obs_mid", "obs_half", "tile_inputs", "tile_offsets", "tile_resolution", "tile_strides", "tile_bases", "tile_weight", "bias")
+TILE_ARRAYS = (
+    *("obs_mid", "obs_half", "tile_inputs", "tile_offsets", "tile_resolution", "tile_strides", "tile_bases"),
+    *("tile_weight", "bias"),
+)
 
 __all__ = [
     "FORMAT_NAME",
@@ -265,8 +268,10 @@ def _check_header(header: Any, path: Any) -> None:
             if features["n_features"] != d:
                 raise _fail(path, f"scaled features: n_features={features['n_features']!r} for {d} inputs")
         elif features["type"] == "tiles":
-            if not all(_positive_int(features[key]) for key in ("n_codings", "group_size", "n_features")) or head["type"] != "linear":
-                raise _fail(path, f"tile features need positive n_codings, group_size, n_features and a linear head, got {features!r}, head {head!r}")
+            sizes = ("n_codings", "group_size", "n_features")
+            if not all(_positive_int(features[key]) for key in sizes) or head["type"] != "linear":
+                why = f"tile features need positive {', '.join(sizes)} and a linear head, got {features!r}, head {head!r}"
+                raise _fail(path, why)
         else:
             raise _fail(path, f"unknown feature type {features['type']!r} (known: 'rbf', 'scaled', 'tiles')")
         if head["type"] == "tanh_mlp":

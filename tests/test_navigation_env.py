@@ -18,12 +18,14 @@ def test_turn_then_move_reaches_the_target():
     for seed in range(20):
         obs, _ = env.reset(seed=seed)
         offset = 2 * obs[:2].astype(np.float64)
-        obs, reward, terminated, _, info = env.step((0, (np.array([math.atan2(offset[1], offset[0])], np.float32), np.zeros(1, np.float32))))
+        turn = np.array([math.atan2(offset[1], offset[0])], np.float32)
+        obs, reward, terminated, _, info = env.step((0, (turn, np.zeros(1, np.float32))))
         assert not terminated and reward == pytest.approx(-0.01)
         assert obs[2:] == pytest.approx([offset[0] / np.hypot(*offset), offset[1] / np.hypot(*offset)], abs=1e-6)
         distance = float(np.hypot(*offset))
         while not terminated:  # farther than one move: keep going straight
-            obs, reward, terminated, truncated, info = env.step((1, (np.zeros(1, np.float32), np.array([min(distance, 1.0)], np.float32))))
+            move = np.array([min(distance, 1.0)], np.float32)
+            obs, reward, terminated, truncated, info = env.step((1, (np.zeros(1, np.float32), move)))
             distance = info["distance"]
             assert not truncated
         assert info["is_success"] and reward > 1.0

@@ -17,9 +17,8 @@ OBS = np.random.default_rng(5).uniform(-1, 1, (2000, 2))
 
 
 def scaled_reward_env(scale: float, n_envs: int = 4):
-    return make_vec_env(
-        ParameterizedTargetEnv, n_envs=n_envs, seed=0, wrapper_class=gym.wrappers.TransformReward, wrapper_kwargs=dict(func=lambda r: r * scale)
-    )
+    wrapper = gym.wrappers.TransformReward
+    return make_vec_env(ParameterizedTargetEnv, n_envs=n_envs, seed=0, wrapper_class=wrapper, wrapper_kwargs=dict(func=lambda r: r * scale))
 
 
 def greedy(model):
@@ -101,7 +100,7 @@ def test_many_lanes_do_not_diverge(policy):
     [
         (dict(learning_rate=-1.0), r"learning_rate must be in \(0, 1\]"),
         (dict(q_learning_rate=1.5), r"q_learning_rate must be in \(0, 1\]"),
-        (dict(param_learning_rate=lambda progress: progress), r"param_learning_rate must be in \(0, 1\].*schedule from 1.0 to 0.0"),
+        (dict(param_learning_rate=lambda p: p), r"param_learning_rate must be in \(0, 1\].*schedule from 1.0 to 0.0"),
         (dict(learning_rate=float("nan")), r"learning_rate must be in \(0, 1\]"),
         (dict(gamma="0.9"), "gamma must be in"),
         (dict(param_noise_final=float("inf")), "param_noise_final must be a finite number >= 0"),

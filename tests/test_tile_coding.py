@@ -34,7 +34,7 @@ def test_rate_one_lands_identical_samples_on_target(n):
     obs = np.tile([[0.3, -0.2, 0.9]], (n, 1))
     out, cache = kernel.forward(obs)
     kernel.update(cache, np.tile([[1.0, -3.0]], (n, 1)), np.ones(2))
-    np.testing.assert_allclose(kernel.forward(obs[:1])[0], out[:1] + [[1.0, -3.0]], atol=1e-12)
+    np.testing.assert_allclose(kernel.forward(obs[:1])[0], out[:1] + np.array([[1.0, -3.0]]), atol=1e-12)
 
 
 def test_bad_arguments():

@@ -230,7 +230,8 @@ class TileKernel(TileForward):
         self._counts = np.zeros(bank.n_features, dtype=np.int64)
 
     def features(self, obs: np.ndarray) -> np.ndarray:
-        return _active_features(np.ascontiguousarray(obs, dtype=np.float64), self.inputs, self.tile_a, self.tile_b, self.limit, self.strides, self.bases)
+        obs = np.ascontiguousarray(obs, dtype=np.float64)
+        return _active_features(obs, self.inputs, self.tile_a, self.tile_b, self.limit, self.strides, self.bases)
 
     def outputs(self, active: np.ndarray) -> tuple[np.ndarray, None]:
         return _outputs(active, self.w, self.b), None

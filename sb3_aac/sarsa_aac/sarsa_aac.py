@@ -383,7 +383,9 @@ class SarsaAAC(BaseAlgorithm):
         callback.on_training_end()
         return self
 
-    def _step_arrays(self, env: Any, k: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
+    def _step_arrays(
+        self, env: Any, k: np.ndarray, params: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
         """
         One step on the array path (:mod:`sb3_aac.common.array_env`), returned as SB3's ``VecEnv.step`` would:
         ``info`` dicts are built only for the lanes whose episode ended (the others share one empty dict).
@@ -564,7 +566,10 @@ class SarsaAAC(BaseAlgorithm):
             with th.no_grad():
                 for name, p in self.policy.approximators.named_parameters():
                     p.copy_(self._finite_weights[name])
-            restored = f"the weights were restored to those of timestep {self._finite_weights_timestep}, so save() keeps a usable model"
+            restored = (
+                f"the weights were restored to those of timestep {self._finite_weights_timestep}, "
+                "so save() keeps a usable model"
+            )
         self._pending = None  # choose afresh with the restored weights
         raise FloatingPointError(
             f"SarsaAAC diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}; {restored}. "
