@@ -17,8 +17,8 @@ OBS = np.random.default_rng(5).uniform(-1, 1, (2000, 2))
 
 
 def scaled_reward_env(scale: float, n_envs: int = 4):
-    wrapper = gym.wrappers.TransformReward
-    return make_vec_env(ParameterizedTargetEnv, n_envs=n_envs, seed=0, wrapper_class=wrapper, wrapper_kwargs=dict(func=lambda r: r * scale))
+    scaled = dict(wrapper_class=gym.wrappers.TransformReward, wrapper_kwargs=dict(func=lambda r: r * scale))
+    return make_vec_env(ParameterizedTargetEnv, n_envs=n_envs, seed=0, **scaled)
 
 
 def greedy(model):

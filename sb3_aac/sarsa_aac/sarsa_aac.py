@@ -368,9 +368,11 @@ class SarsaAAC(BaseAlgorithm):
                     self._last_obs, self._last_episode_starts, self._pending = new_obs, dones, None
                     break
 
-                self._update_info_buffer(infos, dones)
                 self._update_current_progress_remaining(self.num_timesteps, total_timesteps)
                 any_done = dones.any()
+                if any_done:  # episode statistics and success flags exist only where an episode ended
+                    ended = np.flatnonzero(dones)
+                    self._update_info_buffer([infos[i] for i in ended], dones[ended])
                 self._train_step(new_obs, rewards, dones, infos, any_done)
                 self._last_obs, self._last_episode_starts = new_obs, dones
                 if any_done:
