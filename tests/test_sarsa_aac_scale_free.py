@@ -145,3 +145,14 @@ def test_divergence_restores_finite_weights(tmp_path, policy):
     loaded = SarsaAAC.load(tmp_path / "model.zip")
     action, _ = loaded.predict(np.zeros(1, np.float32), deterministic=True)
     assert np.isfinite(action[1]).all()
+
+
+def test_return_scale_survives_save_load(tmp_path):
+    model = SarsaAAC("MlpPolicy", scaled_reward_env(50.0, n_envs=2), seed=0)
+    model.learn(500)
+    model.save(tmp_path / "model.zip")
+    loaded = SarsaAAC.load(tmp_path / "model.zip", env=scaled_reward_env(50.0, n_envs=2))
+    assert loaded.return_scale == model.return_scale > 0 and loaded._value_units_set
+    before = loaded.policy.approximators.weight2.clone()
+    loaded.learn(2, reset_num_timesteps=False)  # one step: a small change, not a rescale by return_scale
+    assert (loaded.policy.approximators.weight2 - before).abs().max() < 0.5 * before.abs().max()

@@ -247,6 +247,9 @@ class SarsaAAC(BaseAlgorithm):
         # Kept when load() calls this after restoring them (0 until the first non-zero reward).
         self._return_moments = getattr(self, "_return_moments", np.zeros(2))
         self.return_scale = getattr(self, "return_scale", 0.0)
+        # Whether the Q and V weights are in return units yet. A model saved before return scaling existed (loaded
+        # with timesteps but without this flag) has trained weights in reward units: they must not be rescaled.
+        self._value_units_set = getattr(self, "_value_units_set", self.num_timesteps > 0)
         self._reset_keyword_buffers()
         self._reset_train_stats()
 
@@ -483,8 +486,9 @@ class SarsaAAC(BaseAlgorithm):
         lane_returns[dones] = 0.0
         count, square_sum = self._return_moments
         scale = math.sqrt(square_sum / count)
-        if scale > 0 and self.return_scale == 0:
+        if scale > 0 and not self._value_units_set:
             self.policy.scale_value_outputs(scale)
+            self._value_units_set = True
         if scale > 0:
             self.return_scale = scale
             self._set_return_units()
