@@ -8,7 +8,12 @@ through :class:`sb3_aac.DiscretizeParameterizedAction` (a Discrete grid). A last
 :class:`robocup_dribble.DribbleVecEnv` with the same number of lanes, which is how the dribbling env is meant to be
 trained.
 
-Usage: ``python benchmarks/algo_speed.py [--steps 20000] [--n-envs 1 4 16] [--policy RbfPolicy] [--torch-threads 1]``
+A last line gives SarsaAAC's own cost on the array path (:mod:`sb3_aac.common.array_env`) for ``--array-lanes``
+lanes: a :class:`NullArrayEnv` with the dribbling env's spaces whose ``step_arrays`` costs almost nothing, so the
+figure is the algorithm's ceiling, which an array env's own cost then lowers.
+
+Usage: ``python benchmarks/algo_speed.py [--steps 20000] [--n-envs 1 4 16] [--policy RbfPolicy] [--torch-threads 1]
+[--array-lanes 256]``
 
 Single runs on a shared machine: repeat them, and report the load average next to the numbers.
 """
@@ -20,19 +25,76 @@ import os
 import statistics
 import time
 
-import gymnasium as gym
-import numpy as np
-import torch as th
-from stable_baselines3 import DQN, PPO
-from stable_baselines3.common.env_util import make_vec_env
+# One BLAS thread: on a busy two-core machine OpenBLAS's own threads made SarsaAAC's small matrix products up to 70x
+# slower (256 lanes, RbfPolicy: 15 ms instead of 0.2 ms per forward pass). Set before numpy is imported.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-import robocup_dribble
-from sb3_aac import DiscretizeParameterizedAction, FlattenParameterizedAction, SarsaAAC
+import gymnasium as gym  # noqa: E402
+import numpy as np  # noqa: E402
+import torch as th  # noqa: E402
+from stable_baselines3 import DQN, PPO  # noqa: E402
+from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
+from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
+
+import robocup_dribble  # noqa: E402
+from sb3_aac import DiscretizeParameterizedAction, FlattenParameterizedAction, SarsaAAC  # noqa: E402
+from sb3_aac.common.array_env import ArrayStep  # noqa: E402
+
+
+class NullArrayEnv(VecEnv):
+    """
+    An array env that does no work: uniform observations in the given space, reward 1, and each lane's episode
+    terminates with probability ``1 / mean_length`` per step. Only ``step_arrays`` (and ``reset``) are implemented.
+    """
+
+    def __init__(
+        self, n_envs: int, observation_space: gym.spaces.Box, action_space: gym.spaces.Space, mean_length: int = 10
+    ):
+        super().__init__(n_envs, observation_space, action_space)
+        self._rng = np.random.default_rng(0)
+        self._low, self._high = observation_space.low.astype(np.float64), observation_space.high.astype(np.float64)
+        self._lengths = np.zeros(n_envs, dtype=np.int64)
+        self._end_probability = 1.0 / mean_length
+
+    def _observations(self) -> np.ndarray:
+        return self._rng.uniform(self._low, self._high, (self.num_envs, len(self._low)))
+
+    def reset(self) -> np.ndarray:
+        return self._observations()
+
+    def step_arrays(self, action_types: np.ndarray, params: np.ndarray) -> ArrayStep:
+        self._lengths += 1
+        ended = self._rng.random(self.num_envs) < self._end_probability
+        observations = self._observations()
+        lengths = self._lengths.copy()
+        self._lengths[ended] = 0
+        no = np.zeros(self.num_envs, dtype=bool)
+        returns = lengths.astype(np.float64)  # reward 1 per step
+        return ArrayStep(observations, np.ones(self.num_envs), ended, no, observations, returns, lengths, {})
+
+    def step_async(self, actions: np.ndarray) -> None:
+        raise NotImplementedError("NullArrayEnv offers the array path only")
+
+    step_wait = set_attr = env_method = step_async  # type: ignore[assignment]
+
+    def get_attr(self, attr_name: str, indices: object = None) -> list:
+        return [None] * self.num_envs
+
+    def env_is_wrapped(self, wrapper_class: type, indices: object = None) -> list[bool]:
+        return [False] * self.num_envs
+
+    def close(self) -> None:
+        pass
 
 
 def build(algo: str, env_id: str, n_envs: int, policy: str):
     if algo == "SarsaAAC":
         return SarsaAAC(policy, make_vec_env(env_id, n_envs=n_envs, seed=0), seed=0)
+    if algo == "SarsaAAC+NullArrayEnv":
+        spaces_env = gym.make(env_id)
+        env = NullArrayEnv(n_envs, spaces_env.observation_space, spaces_env.action_space)
+        return SarsaAAC(policy, env, seed=0, info_keywords=())
     if algo == "SarsaAAC+DribbleVecEnv":
         profile = gym.spec(env_id).kwargs["profile"]
         return SarsaAAC(policy, robocup_dribble.DribbleVecEnv(n_envs, profile=profile), seed=0)
@@ -67,6 +129,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=20_000, help="env steps per training measurement")
     parser.add_argument("--n-envs", type=int, nargs="+", default=[1, 4, 16])
     parser.add_argument("--policy", default="RbfPolicy", help="SarsaAAC policy")
+    parser.add_argument("--array-lanes", type=int, default=256, help="lanes of the algorithm-only array-path measurement")
     parser.add_argument(
         "--torch-threads", type=int, default=1, help="torch threads for PPO/DQN (1 is fastest at these sizes on a busy box)"
     )
@@ -85,6 +148,9 @@ def main() -> None:
             f"{rates['SarsaAAC+DribbleVecEnv']:>23.0f} ({rates['SarsaAAC+DribbleVecEnv'] / rates['PPO']:.1f}x PPO)",
             flush=True,
         )
+    lanes = args.array_lanes
+    algorithm_only = steps_per_second("SarsaAAC+NullArrayEnv", args.env, lanes, max(args.steps, 50 * lanes), args.policy)
+    print(f"SarsaAAC {args.policy} alone on the array path (NullArrayEnv, {lanes} lanes): {algorithm_only:.0f} env steps/s")
     obs = gym.make(args.env).reset(seed=0)[0]
     sarsa, dqn = build("SarsaAAC", args.env, 1, args.policy), build("DQN", args.env, 1, args.policy)
     print(

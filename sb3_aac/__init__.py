@@ -4,7 +4,7 @@ import os
 
 from sb3_aac.export import export_policy
 from sb3_aac.runtime import RuntimePolicy
-from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy
+from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy, TilePolicy
 from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction, SelectObservation
 
 with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handler:
@@ -20,6 +20,7 @@ __all__ = [
     "SarsaAAC",
     "SarsaAACPolicy",
     "SelectObservation",
+    "TilePolicy",
     "__version__",
     "export_policy",
 ]

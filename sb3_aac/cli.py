@@ -27,11 +27,11 @@ from sb3_aac.common.output_files import DirectoryPublisher, check_writable_dir, 
 
 DRIBBLE_IDS = {"RoboCupDribble-v0": "v19", "RoboCupDribblePaper-v0": "v11"}
 PROFILE_ENV_IDS = {profile: env_id for env_id, profile in DRIBBLE_IDS.items()}
-POLICIES = ("MlpPolicy", "RbfMlpPolicy", "RbfPolicy")
+POLICIES = ("MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy")
 TOY_ENV_ID = "sb3_aac/ParameterizedTarget-v0"
 # SarsaAAC constructor arguments the CLI sets itself (not through --set).
 RESERVED = ("policy", "env", "tensorboard_log", "seed", "device", "verbose", "_init_setup_model")
-POLICY_KEYS = ("hidden_units", "n_rbf", "rbf_width", "obs_bounds")
+POLICY_KEYS = ("hidden_units", "n_rbf", "rbf_width", "obs_bounds", "tile_groups", "tiles_per_input", "n_tilings")
 MODEL_SUFFIXES = (".zip", ".aacp")
 VIDEO_SUFFIXES = (".gif", ".mp4")
 
@@ -160,7 +160,7 @@ def import_gym_packages(names: list[str]) -> None:
     for name in names:
         try:
             importlib.import_module(name)
-        except ImportError as error:
+        except (ImportError, TypeError, ValueError) as error:  # TypeError/ValueError: relative or empty names (".", "")
             raise CliError(f"--gym-package {name!r} cannot be imported ({error}); is it installed / on PYTHONPATH?") from None
 
 

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from sb3_aac.common.output_files import replaced_atomically
+from sb3_aac.common.tile_coding import TileBank
 from sb3_aac.runtime import (
     ALIGNMENT,
     ARRAY_DTYPE,
@@ -29,6 +30,7 @@ from sb3_aac.runtime import (
     FORMAT_VERSION,
     MAGIC,
     PREAMBLE,
+    TILE_ARRAYS,
     expected_array_shapes,
     policy_file_path,
     read_policy_file,
@@ -57,8 +59,11 @@ def policy_arrays(policy: Any) -> dict[str, np.ndarray]:
         "param_low": policy.spec.low,
         "param_high": policy.spec.high,
     }
-    names = ["rbf_centers", "rbf_widths"] if bank.n_rbf is not None else []
-    names += ["weight", "bias"] if bank.hidden_units is None else ["weight1", "bias1", "weight2", "bias2"]
+    if isinstance(bank, TileBank):
+        names = [name for name in TILE_ARRAYS if name not in arrays]
+    else:
+        names = ["rbf_centers", "rbf_widths"] if bank.n_rbf is not None else []
+        names += ["weight", "bias"] if bank.hidden_units is None else ["weight1", "bias1", "weight2", "bias2"]
     for name in names:
         arrays[name] = getattr(bank, name)
     return {
@@ -97,15 +102,28 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
         "approximators": {
             "n_outputs": k + n_params + 1,
             "outputs": {"q": [0, k], "params": [k, k + n_params], "value": k + n_params},
-            "features": (
-                {"type": "scaled", "n_features": bank.n_features}
-                if bank.n_rbf is None
-                else {"type": "rbf", "n_rbf": bank.n_rbf, "rbf_width": float(policy.rbf_width), "n_features": bank.n_features}
-            ),
+            "features": _features_header(policy),
             "head": {"type": "linear"} if bank.hidden_units is None else {"type": "tanh_mlp", "hidden_units": bank.hidden_units},
         },
         "metadata": dict(metadata or {}),
     }
+
+
+def _features_header(policy: Any) -> dict[str, Any]:
+    bank = policy.approximators
+    if isinstance(bank, TileBank):
+        return {
+            "type": "tiles",
+            "groups": [list(group) for group in bank.groups],
+            "tiles_per_input": bank.tiles_per_input,
+            "n_tilings": bank.n_tilings,
+            "n_codings": bank.n_active,
+            "group_size": int(bank.tile_inputs.shape[1]),
+            "n_features": bank.n_features,
+        }
+    if bank.n_rbf is None:
+        return {"type": "scaled", "n_features": bank.n_features}
+    return {"type": "rbf", "n_rbf": bank.n_rbf, "rbf_width": float(policy.rbf_width), "n_features": bank.n_features}
 
 
 def encode_policy_file(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> bytes:

@@ -49,6 +49,10 @@ MAX_BLOB_BYTES = 1 << 30  # the arrays of the largest sensible policy are megaby
 CHECKSUM_MISMATCH = "SHA-256 checksum mismatch: the file is truncated, corrupted or was altered; export it again"
 
 BANK_ARRAYS = ("obs_mid", "obs_half", "rbf_centers", "rbf_widths", "weight", "bias", "weight1", "bias1", "weight2", "bias2")
+TILE_ARRAYS = (
+    *("obs_mid", "obs_half", "tile_inputs", "tile_offsets", "tile_resolution", "tile_strides", "tile_bases"),
+    *("tile_weight", "bias"),
+)
 
 __all__ = [
     "FORMAT_NAME",
@@ -56,6 +60,7 @@ __all__ = [
     "MAGIC",
     "BankForward",
     "RuntimePolicy",
+    "TileForward",
     "expected_array_shapes",
     "policy_file_path",
     "read_policy_file",
@@ -133,6 +138,60 @@ class BankForward:
         return (hidden * self.w2).sum(-1) + self.b2, hidden
 
 
+class TileForward:
+    """
+    The forward pass of a bank of ``A`` linear approximators on tile-coding features: the only implementation
+    of these formulas (training subclasses it, :class:`sb3_aac.common.tile_coding.TileKernel`).
+
+    ``C`` codings (one per group of inputs and tiling) each activate exactly one binary feature. Coding ``c``
+    reads the inputs ``tile_inputs[c]`` (``k`` per coding; a padded slot has stride 0), scales each to
+    ``[-1, 1]`` with ``obs_mid`` / ``obs_half``, and takes the tile coordinate
+    ``clip(floor((s~ + 1) / 2 * tile_resolution + tile_offsets), 0, tile_resolution)`` per input; its active feature
+    is ``tile_bases[c] + sum_j coordinate_j * tile_strides[c, j]``. The output of approximator ``a`` is
+    ``sum_c tile_weight[active_c, a] + bias[a]``, so one evaluation costs ``O(C * A)`` whatever the table size.
+
+    The arguments are the arrays of the export format: ``obs_mid``, ``obs_half`` ``(D,)``; ``tile_inputs``,
+    ``tile_offsets``, ``tile_resolution``, ``tile_strides`` ``(C, k)``; ``tile_bases`` ``(C,)``; ``tile_weight``
+    ``(F, A)``; ``bias`` ``(A,)``. Index arrays may be given as float64 (as files store them). The weights are held
+    as given (views), so in-place updates are seen by the next call.
+    """
+
+    def __init__(
+        self,
+        obs_mid: np.ndarray,
+        obs_half: np.ndarray,
+        tile_inputs: np.ndarray,
+        tile_offsets: np.ndarray,
+        tile_resolution: np.ndarray,
+        tile_strides: np.ndarray,
+        tile_bases: np.ndarray,
+        tile_weight: np.ndarray,
+        bias: np.ndarray,
+    ):
+        self.inputs = np.asarray(tile_inputs).astype(np.int64)
+        half = np.asarray(obs_half, dtype=np.float64)[self.inputs]
+        mid = np.asarray(obs_mid, dtype=np.float64)[self.inputs]
+        resolution = np.asarray(tile_resolution, dtype=np.float64)
+        # (s - mid) / half * res / 2 + res / 2 + offset = s * a - b
+        self.tile_a = resolution / (2 * half)
+        self.tile_b = mid * self.tile_a - resolution / 2 - np.asarray(tile_offsets, dtype=np.float64)
+        self.limit = resolution
+        self.strides = np.asarray(tile_strides).astype(np.int64)
+        self.bases = np.asarray(tile_bases).astype(np.int64)
+        self.w, self.b = tile_weight, bias
+
+    def features(self, obs: np.ndarray) -> np.ndarray:
+        """Observations ``(n, D)`` -> the active feature of every coding, ``(n, C)`` int64."""
+        position = obs[:, self.inputs] * self.tile_a - self.tile_b  # (n, C, k)
+        np.floor(position, out=position)
+        np.clip(position, 0.0, self.limit, out=position)
+        return np.einsum("nck,ck->nc", position.astype(np.int64), self.strides) + self.bases
+
+    def outputs(self, active: np.ndarray) -> tuple[np.ndarray, None]:
+        """Active features ``(n, C)`` -> every output ``(n, A)`` (and None: there is no hidden layer)."""
+        return self.w[active].sum(1) + self.b, None
+
+
 def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
     """The arrays a version-1 file must hold, with their shapes, given its (checked) header."""
     d = header["observation"]["size"]
@@ -150,12 +209,29 @@ def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
     if approx["features"]["type"] == "rbf":
         m = approx["features"]["n_rbf"]
         shapes["rbf_centers"] = shapes["rbf_widths"] = (d, m)
-    if approx["head"]["type"] == "linear":
+    if approx["features"]["type"] == "tiles":
+        c, k = approx["features"]["n_codings"], approx["features"]["group_size"]
+        shapes.update(tile_inputs=(c, k), tile_offsets=(c, k), tile_resolution=(c, k), tile_strides=(c, k), tile_bases=(c,))
+        shapes.update(tile_weight=(f, a), bias=(a,))
+    elif approx["head"]["type"] == "linear":
         shapes.update(weight=(a, f), bias=(a,))
     else:
         h = approx["head"]["hidden_units"]
         shapes.update(weight1=(a, h, f), bias1=(a, h), weight2=(a, h), bias2=(a,))
     return shapes
+
+
+def _check_tile_arrays(arrays: dict[str, np.ndarray], n_inputs: int, n_features: int, path: Any) -> None:
+    """Tile-coding index arrays: whole numbers, inputs in range, and every reachable feature inside the table."""
+    inputs, resolution = arrays["tile_inputs"], arrays["tile_resolution"]
+    strides, bases = arrays["tile_strides"], arrays["tile_bases"]
+    for name in ("tile_inputs", "tile_resolution", "tile_strides", "tile_bases"):
+        if not (np.floor(arrays[name]) == arrays[name]).all() or (arrays[name] < 0).any():
+            raise _fail(path, f"array {name!r} must hold whole numbers >= 0")
+    if (inputs >= n_inputs).any() or (resolution < 1).any():
+        raise _fail(path, f"tile_inputs must be < {n_inputs} and tile_resolution >= 1")
+    if (bases + (resolution * strides).sum(1)).max() >= n_features:
+        raise _fail(path, f"the tile grids reach past the {n_features} features of the table")
 
 
 def _fail(path: Any, why: str) -> ValueError:
@@ -205,8 +281,13 @@ def _check_header(header: Any, path: Any) -> None:
         elif features["type"] == "scaled":
             if features["n_features"] != d:
                 raise _fail(path, f"scaled features: n_features={features['n_features']!r} for {d} inputs")
+        elif features["type"] == "tiles":
+            sizes = ("n_codings", "group_size", "n_features")
+            if not all(_positive_int(features[key]) for key in sizes) or head["type"] != "linear":
+                why = f"tile features need positive {', '.join(sizes)} and a linear head, got {features!r}, head {head!r}"
+                raise _fail(path, why)
         else:
-            raise _fail(path, f"unknown feature type {features['type']!r} (known: 'rbf', 'scaled')")
+            raise _fail(path, f"unknown feature type {features['type']!r} (known: 'rbf', 'scaled', 'tiles')")
         if head["type"] == "tanh_mlp":
             if not _positive_int(head["hidden_units"]):
                 raise _fail(path, f"hidden_units={head['hidden_units']!r}")
@@ -475,15 +556,24 @@ class RuntimePolicy:
 
         if "rbf_widths" in arrays and not (arrays["rbf_widths"] > 0).all():
             raise _fail(path, "rbf_widths must be > 0 everywhere")
-        self._bank = bank = BankForward(**{name: arrays[name] for name in BANK_ARRAYS if name in arrays})
-        self.rbf, self.mlp = bank.rbf, bank.mlp
+        self.tiles = approx["features"]["type"] == "tiles"
         self.hidden_units = approx["head"].get("hidden_units")
         k = self.n_types
         self._p_slice = slice(k, k + self.n_params)
         # Per type: its parameter bounds as Python floats.
         self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in map(self.type_slice, range(k))]
-        self._feature_buffer = np.empty(bank.feature_a.shape)  # (D,) or (D, m), reused by act()
         self._kernel_args: tuple | None = None
+        if self.tiles:
+            _check_tile_arrays(arrays, self.obs_size, approx["features"]["n_features"], path)
+            if backend == "numba":
+                raise ValueError("backend='numba' computes dense features only; tile-coding policies run with numpy ('auto')")
+            self._bank: BankForward | TileForward = TileForward(**{name: arrays[name] for name in TILE_ARRAYS})
+            self.rbf = self.mlp = False
+            self.backend = "numpy"
+            return
+        self._bank = bank = BankForward(**{name: arrays[name] for name in BANK_ARRAYS if name in arrays})
+        self.rbf, self.mlp = bank.rbf, bank.mlp
+        self._feature_buffer = np.empty(bank.feature_a.shape)  # (D,) or (D, m), reused by act()
         if backend != "numpy":
             kernel = _act_kernel()
             if kernel is None and backend == "numba":
@@ -565,10 +655,13 @@ class RuntimePolicy:
             if k < 0:
                 raise ValueError(f"The observation holds NaN or inf values: {x}")
             return self.type_start + k, self._kernel_args[-1][:dim].astype(self.param_dtypes[k])
-        phi = self._bank.features(self._observation(obs), out=self._feature_buffer)
-        # Every output at once: with numpy, one matrix-vector product costs less than separate calls for Q and
-        # for the chosen type's parameters (a C++ runtime would compute only those, see docs/export-format.md).
-        out = self._bank.outputs(phi)[0].tolist()
+        if self.tiles:
+            out = self._bank.outputs(self._bank.features(self._observation(obs)[None]))[0][0].tolist()
+        else:
+            phi = self._bank.features(self._observation(obs), out=self._feature_buffer)
+            # Every output at once: with numpy, one matrix-vector product costs less than separate calls for Q and
+            # for the chosen type's parameters (a C++ runtime would compute only those, see docs/export-format.md).
+            out = self._bank.outputs(phi)[0].tolist()
         q = out[: self.n_types]
         k = q.index(max(q))  # the first maximum, like numpy's argmax
         # Unscale in Python floats: the same IEEE operations as unscale(), cheaper on a few values.

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import torch as th
 
-from sb3_aac.common.approximators import ApproximatorBank, rbf_layout
+from sb3_aac.common.approximators import ApproximatorBank, rbf_layout, step_normalisers
 
 CONFIGS = {
     "mlp": dict(n_rbf=None, hidden_units=5),
@@ -157,3 +157,25 @@ def test_bad_arguments(kwargs, message):
 def test_infinite_bounds_without_rbf_pass_inputs_unscaled():
     bank = ApproximatorBank(np.array([-np.inf, 0.0]), np.array([np.inf, 2.0]), 1)
     np.testing.assert_allclose(bank.numpy_kernel().features(np.array([[7.0, 2.0]])), [[7.0, 1.0]])
+
+
+@pytest.mark.parametrize("n_rbf", [None, 10])
+@pytest.mark.parametrize("n", [1, 256])
+def test_rate_one_lands_identical_samples_on_target(n_rbf, n):
+    """n copies of one sample: the batch normalisation averages them, so a rate of 1 lands on the target (not n times past)."""
+    bank = ApproximatorBank(LOW, HIGH, 2, n_rbf=n_rbf)
+    kernel = bank.numpy_kernel()
+    obs = np.tile([[0.3, 1.2, -2.0]], (n, 1))
+    out, cache = kernel.forward(obs)
+    kernel.update(cache, np.tile([[1.0, -3.0]], (n, 1)), np.ones(2))
+    np.testing.assert_allclose(kernel.forward(obs[:1])[0], out[:1] + [[1.0, -3.0]], atol=1e-12)
+
+
+def test_disjoint_samples_keep_their_own_weight_steps():
+    """RBF features far apart barely overlap: their weight steps are not shrunk; the shared bias step is averaged."""
+    bank = ApproximatorBank(np.zeros(1), np.ones(1), 1, n_rbf=50, rbf_width=0.5)
+    x = bank.numpy_kernel().features(np.array([[0.0], [1.0]]))
+    weights, bias = step_normalisers(x)
+    w = 1 / (1 + (x * x).sum(1))
+    np.testing.assert_allclose(weights, w, rtol=1e-6)
+    np.testing.assert_allclose(bias, w / (w.sum() / (1 - (w * (x * x).sum(1)).mean())))

@@ -133,6 +133,7 @@ def test_module_entry_point() -> None:
         (["train", "--policy", "CnnPolicy"], "invalid choice"),
         (["train", "--env", "CartPole-v1", "--timesteps", "10"], "not a parameterized action space"),
         (["train", "--gym-package", "no_such_module_xyz"], "cannot be imported"),
+        (["train", "--gym-package", "."], "cannot be imported"),
         (["evaluate", "missing.zip"], "does not exist"),
         (["evaluate", "dribbler", "--episodes", "0"], "must be positive"),
         (["reliability", "dribbler", "--out", "figure.jpg"], "must end with .png"),

@@ -77,7 +77,10 @@ def tmp_dir(tmp_path_factory) -> Path:
 @pytest.mark.parametrize("layout", LAYOUTS)
 @pytest.mark.parametrize("policy", POLICIES)
 def test_same_decisions_as_predict(policy: str, layout: str, tmp_dir: Path) -> None:
-    model = randomised_model(policy, layout, n_rbf=7 if policy != "MlpPolicy" else None, hidden_units=None if policy == "RbfPolicy" else 4)
+    if policy == "TilePolicy":
+        model = randomised_model(policy, layout, tiles_per_input=5, n_tilings=3)
+    else:
+        model = randomised_model(policy, layout, n_rbf=7 if policy != "MlpPolicy" else None, hidden_units=None if policy == "RbfPolicy" else 4)
     path = export_policy(model, tmp_dir / f"{policy}-{layout}")
     assert path.suffix == ".aacp"
     obs = observations(model)
@@ -86,7 +89,7 @@ def test_same_decisions_as_predict(policy: str, layout: str, tmp_dir: Path) -> N
     types = np.array([a[0] for a in expected])
     assert len(np.unique(types)) == spec.n_types, "the test needs every type to be chosen somewhere"
 
-    for backend in ("numpy", "numba"):
+    for backend in ("numpy",) if policy == "TilePolicy" else ("numpy", "numba"):
         runtime = RuntimePolicy.load(path, backend=backend)
         assert runtime.backend == backend
         # act(): one observation at a time, against predict on one observation
@@ -109,6 +112,22 @@ def test_same_decisions_as_predict(policy: str, layout: str, tmp_dir: Path) -> N
     # the critic comes along
     out, _ = model.policy.evaluate(obs[:50].astype(np.float64))
     np.testing.assert_allclose(runtime.value(obs[:50]), out[:, -1], rtol=1e-12, atol=1e-12)
+
+
+def test_tile_files(tmp_dir: Path) -> None:
+    """Tile policies run with numpy only, and a file whose grids reach past the table is refused."""
+    model = randomised_model("TilePolicy", "nested", tiles_per_input=5, n_tilings=3)
+    path = export_policy(model, tmp_dir / "tiles.aacp")
+    assert RuntimePolicy.load(path).backend == "numpy"
+    with pytest.raises(ValueError, match="dense features only"):
+        RuntimePolicy.load(path, backend="numba")
+    header, arrays = read_policy_file(path)
+    arrays = {name: np.array(a) for name, a in arrays.items()}
+    arrays["tile_bases"][-1] += 1
+    bad = tmp_dir / "tiles-bad.aacp"
+    bad.write_bytes(encode_policy_file({k: v for k, v in header.items() if k not in ("arrays", "blob_size")}, arrays))
+    with pytest.raises(ValueError, match="reach past the"):
+        RuntimePolicy.load(bad)
 
 
 def test_dribbling_model_and_metadata(tmp_dir: Path) -> None:

@@ -6,7 +6,7 @@ from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-from sb3_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC
+from sb3_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, TilePolicy
 from sb3_aac.common.envs import ParameterizedTargetEnv
 from sb3_aac.sarsa_aac.sarsa_aac import select_types
 from tests.helpers import LAYOUTS, POLICIES, OneStepEnv
@@ -30,7 +30,12 @@ def test_run(policy, layout):
 
 
 def test_policy_aliases_and_classes():
-    assert SarsaAAC.policy_aliases == {"MlpPolicy": MlpPolicy, "RbfMlpPolicy": RbfMlpPolicy, "RbfPolicy": RbfPolicy}
+    assert SarsaAAC.policy_aliases == {
+        "MlpPolicy": MlpPolicy,
+        "RbfMlpPolicy": RbfMlpPolicy,
+        "RbfPolicy": RbfPolicy,
+        "TilePolicy": TilePolicy,
+    }
     model = SarsaAAC(RbfPolicy, ParameterizedTargetEnv(), seed=0)
     assert isinstance(model.policy, RbfPolicy)
     with pytest.raises(ValueError, match="Policy CnnPolicy unknown"):
@@ -45,6 +50,9 @@ def test_policy_aliases_and_classes():
         ("RbfMlpPolicy", dict(hidden_units=2, n_rbf=5), 10, 2),
         ("RbfPolicy", dict(n_rbf=30), 60, None),
         ("RbfPolicy", dict(n_rbf=50, rbf_width=0.5, obs_bounds=([-2, -2], [2, 2])), 100, None),
+        # Inputs 0, 1 and the pair, 8 tilings: (9 + 9 + 81) * 8 features.
+        ("TilePolicy", dict(), 792, None),
+        ("TilePolicy", dict(tile_groups=[(0, 1)], tiles_per_input=4, n_tilings=2), 50, None),
     ],
 )
 def test_policy_kwargs(policy, policy_kwargs, n_features, hidden):
@@ -134,7 +142,7 @@ def test_predict_explores_when_not_deterministic():
         (dict(type_exploration="softmax"), "Unknown type_exploration 'softmax'"),
         (dict(gamma=1.5), "gamma must be in"),
         (dict(exploration_fraction=0.0), "exploration_fraction must be in"),
-        (dict(param_noise_initial=-0.1), "param_noise_initial must be >= 0"),
+        (dict(param_noise_initial=-0.1), "param_noise_initial must be a finite number >= 0"),
         (dict(exploration_initial_eps=2.0), "epsilon-greedy exploration rates must be <= 1"),
     ],
 )
@@ -195,7 +203,8 @@ def test_termination_does_not_bootstrap_truncation_does():
 
 
 def test_divergence_raises_clear_error():
-    model = SarsaAAC("RbfPolicy", OneStepEnv(truncate=False), learning_rate=50.0, seed=0)
+    """Rewards of 1e300 overflow the value scale: the error names the approximators and the remedies."""
+    model = SarsaAAC("RbfPolicy", OneStepEnv(truncate=False, reward=1e300), seed=0)
     with pytest.raises(FloatingPointError, match=r"SarsaAAC diverged: .*critic.* became non-finite .* Lower the learning"):
         model.learn(2000)
 

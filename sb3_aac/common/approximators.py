@@ -19,11 +19,16 @@ An :class:`ApproximatorBank` holds ``A`` independent approximators ``f_a(s)``, `
 The three function approximators of Uc-Cetina (2013, Sec. 4.2) are the configurations
 (``n_rbf=None``, ``H``) (MLP), (``m``, ``H``) (MLP with an RBF filter layer) and (``m``, ``None``) (RBF arrays).
 
-Training is per-sample gradient descent on ``0.5 * err**2`` with a *normalised* step size (chosen by us; the paper
-gives none): each layer's step is divided by ``1 + ||input of that layer||**2``. For a linear head this is the
-normalised LMS rule, so a learning rate of 1 moves that sample's output all the way to its target and any rate in
-``(0, 1]`` is stable whatever the number of features; the default rates therefore work for 10, 30 or 50 RBFs per
-input alike. Updates from the ``n`` samples of a batch (one per environment) are summed.
+Training is gradient descent on ``0.5 * err**2`` with *normalised* step sizes (chosen by us; the paper gives none),
+for a batch of ``n`` samples (one per environment) at once:
+
+- per sample, each layer's step is divided by ``1 + ||input of that layer||**2`` (normalised LMS). For one sample
+  and a linear head a learning rate of 1 moves the output all the way to its target, whatever the number of
+  features, so the default rates work for 10, 30 or 50 RBFs per input alike;
+- the batch's summed steps are divided by factors that bound how much the samples' steps add up along shared
+  directions (:func:`step_normalisers`), for the weights and for the bias (which every sample shares) apart:
+  1 for one sample, ``n`` for ``n`` identical samples, and for the weights 1 when the samples' features do not
+  overlap. So the summed step is non-expansive for any rate in ``(0, 1]`` whatever the number of lanes.
 
 The parameters are torch tensors (so SB3's ``state_dict``-based save/load keeps working), but every computation is
 numpy on the CPU: the forward pass is :class:`sb3_aac.runtime.BankForward`, the one implementation of the formulas
@@ -35,7 +40,7 @@ torch op runs per step. ``ApproximatorBank.forward`` runs the same numpy code an
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import torch as th
@@ -43,10 +48,9 @@ from torch import nn
 
 from sb3_aac.runtime import BankForward
 
-
-def _uniform(shape: tuple[int, ...], bound: float) -> nn.Parameter:
-    # Weights are updated by hand (no autograd); float64 keeps many tiny online steps accurate.
-    return nn.Parameter(th.empty(shape, dtype=th.float64).uniform_(-bound, bound), requires_grad=False)
+if TYPE_CHECKING:
+    from sb3_aac.common.tile_coding import TileKernel
+    from sb3_aac.runtime import TileForward
 
 
 def rbf_layout(n_inputs: int, n_rbf: int, rbf_width: float) -> tuple[np.ndarray, np.ndarray]:
@@ -71,7 +75,92 @@ class BankCache(NamedTuple):
     hidden: np.ndarray | None  # (n, A, H) tanh activations, None for a linear head
 
 
-class ApproximatorBank(nn.Module):
+class NumpyBank(nn.Module):
+    """
+    What every bank of approximators shares: parameters as float64 torch tensors (for SB3's save/load), and a numpy
+    kernel on zero-copy views of them, built once and cached. Subclasses build the kernel and the forward pass.
+    """
+
+    # Axis of the outputs (approximators) in each parameter, where it is not 0.
+    output_axes: dict[str, int] = {}  # noqa: RUF012
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._kernel: BankKernel | TileKernel | None = None
+        # load_state_dict copies in place, but the kernel's constants derived from the buffers would go stale.
+        self.register_load_state_dict_post_hook(lambda module, incompatible_keys: module.invalidate_kernel())
+
+    @staticmethod
+    def _uniform(shape: tuple[int, ...], bound: float) -> nn.Parameter:
+        # Weights are updated by hand (no autograd); float64 keeps many tiny online steps accurate.
+        return nn.Parameter(th.empty(shape, dtype=th.float64).uniform_(-bound, bound), requires_grad=False)
+
+    def _make_kernel(self) -> BankKernel | TileKernel:
+        raise NotImplementedError
+
+    def _forward_pass(self) -> BankForward | TileForward:
+        raise NotImplementedError
+
+    def _output_weights(self) -> tuple[th.Tensor, th.Tensor, int]:
+        """The output layer's weight, its bias, and the axis of the outputs in the weight."""
+        raise NotImplementedError
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """
+        The buffers and parameters by name (the names of the forward pass and of the export format) as numpy
+        arrays: zero-copy views of CPU storage, copies from another device.
+        """
+        return {name: t.detach().cpu().numpy() for name, t in (*self.named_buffers(), *self.named_parameters())}
+
+    def evaluate(self, obs: np.ndarray) -> np.ndarray:
+        """Every approximator's output ``(n, A)`` for ``obs`` ``(n, D)``, with numpy (on CPU copies if stored elsewhere)."""
+        bank = self.numpy_kernel() if self.obs_mid.device.type == "cpu" else self._forward_pass()
+        return bank.outputs(bank.features(obs))[0]
+
+    def forward(self, obs: th.Tensor) -> th.Tensor:
+        """:meth:`evaluate` for a tensor ``(n, D)``: a float64 tensor ``(n, A)`` on ``obs``'s device (no autograd)."""
+        return th.as_tensor(self.evaluate(obs.detach().cpu().numpy()), device=obs.device)
+
+    def numpy_kernel(self) -> BankKernel | TileKernel:
+        """
+        Numpy evaluation and update on zero-copy views of the (CPU) parameters, built once and cached.
+
+        The cache is dropped on device/dtype moves and after ``load_state_dict``; after assigning a tensor's
+        ``.data`` directly, call :meth:`invalidate_kernel`.
+        """
+        if self._kernel is None:
+            self._kernel = self._make_kernel()
+        return self._kernel
+
+    def invalidate_kernel(self) -> None:
+        self._kernel = None
+
+    def scale_outputs(self, outputs: list[int], factor: float) -> None:
+        """Multiply the given approximators' outputs by ``factor`` (their output layer's weights and bias)."""
+        weight, bias, axis = self._output_weights()
+        with th.no_grad():
+            th.movedim(weight, axis, 0)[outputs] *= factor  # a view: writes into the weight's storage
+            bias[outputs] *= factor
+
+    def finite_outputs(self) -> np.ndarray:
+        """``(A,)`` bool: whether every parameter of each approximator is finite."""
+        finite = np.ones(self.n_outputs, dtype=bool)
+        for name, p in self.named_parameters():
+            array = np.moveaxis(p.detach().cpu().numpy(), self.output_axes.get(name, 0), 0)
+            finite &= np.isfinite(array.reshape(self.n_outputs, -1)).all(1)
+        return finite
+
+    def __getstate__(self) -> dict:
+        # A copy (deepcopy, pickle) gets new storage, so it must not inherit views of ours.
+        return {**self.__dict__, "_kernel": None}  # not super(): object.__getstate__ is Python 3.11+
+
+    def _apply(self, fn, recurse=True):  # type: ignore[no-untyped-def]
+        # Device and dtype moves replace the storage the numpy views point to.
+        self._kernel = None
+        return super()._apply(fn, recurse)
+
+
+class ApproximatorBank(NumpyBank):
     """
     ``n_outputs`` independent function approximators of one observation vector (see the module docstring).
 
@@ -117,56 +206,23 @@ class ApproximatorBank(nn.Module):
         f, a = self.n_features, n_outputs
         # Fan-in scaled uniform initialisation, like torch.nn.Linear (the paper only says "at random").
         if hidden_units is None:
-            self.weight = _uniform((a, f), 1 / math.sqrt(f))
-            self.bias = _uniform((a,), 1 / math.sqrt(f))
+            self.weight = self._uniform((a, f), 1 / math.sqrt(f))
+            self.bias = self._uniform((a,), 1 / math.sqrt(f))
         else:
             h = hidden_units
-            self.weight1 = _uniform((a, h, f), 1 / math.sqrt(f))
-            self.bias1 = _uniform((a, h), 1 / math.sqrt(f))
-            self.weight2 = _uniform((a, h), 1 / math.sqrt(h))
-            self.bias2 = _uniform((a,), 1 / math.sqrt(h))
-        self._kernel: BankKernel | None = None
-        # load_state_dict copies in place, but the kernel's constants derived from the buffers would go stale.
-        self.register_load_state_dict_post_hook(lambda module, incompatible_keys: module.invalidate_kernel())
+            self.weight1 = self._uniform((a, h, f), 1 / math.sqrt(f))
+            self.bias1 = self._uniform((a, h), 1 / math.sqrt(f))
+            self.weight2 = self._uniform((a, h), 1 / math.sqrt(h))
+            self.bias2 = self._uniform((a,), 1 / math.sqrt(h))
 
-    def arrays(self) -> dict[str, np.ndarray]:
-        """
-        The buffers and parameters by name (the names :class:`~sb3_aac.runtime.BankForward` and the export format
-        use) as numpy arrays: zero-copy views of CPU storage, copies from another device.
-        """
-        return {name: t.detach().cpu().numpy() for name, t in (*self.named_buffers(), *self.named_parameters())}
+    def _make_kernel(self) -> BankKernel:
+        return BankKernel(self)
 
-    def evaluate(self, obs: np.ndarray) -> np.ndarray:
-        """Every approximator's output ``(n, A)`` for ``obs`` ``(n, D)``, with numpy (on CPU copies if stored elsewhere)."""
-        bank = self.numpy_kernel() if self.obs_mid.device.type == "cpu" else BankForward(**self.arrays())
-        return bank.outputs(bank.features(obs))[0]
+    def _forward_pass(self) -> BankForward:
+        return BankForward(**self.arrays())
 
-    def forward(self, obs: th.Tensor) -> th.Tensor:
-        """:meth:`evaluate` for a tensor ``(n, D)``: a float64 tensor ``(n, A)`` on ``obs``'s device (no autograd)."""
-        return th.as_tensor(self.evaluate(obs.detach().cpu().numpy()), device=obs.device)
-
-    def numpy_kernel(self) -> BankKernel:
-        """
-        Numpy evaluation and update on zero-copy views of the (CPU) parameters, built once and cached.
-
-        The cache is dropped on device/dtype moves and after ``load_state_dict``; after assigning a tensor's
-        ``.data`` directly, call :meth:`invalidate_kernel`.
-        """
-        if self._kernel is None:
-            self._kernel = BankKernel(self)
-        return self._kernel
-
-    def invalidate_kernel(self) -> None:
-        self._kernel = None
-
-    def __getstate__(self) -> dict:
-        # A copy (deepcopy, pickle) gets new storage, so it must not inherit views of ours.
-        return {**self.__dict__, "_kernel": None}  # not super(): object.__getstate__ is Python 3.11+
-
-    def _apply(self, fn, recurse=True):  # type: ignore[no-untyped-def]
-        # Device and dtype moves replace the storage the numpy views point to.
-        self._kernel = None
-        return super()._apply(fn, recurse)
+    def _output_weights(self) -> tuple[th.Tensor, th.Tensor, int]:
+        return (self.weight, self.bias, 0) if self.hidden_units is None else (self.weight2, self.bias2, 0)
 
 
 class BankKernel(BankForward):
@@ -189,29 +245,63 @@ class BankKernel(BankForward):
         out, hidden = self.outputs(x)
         return out, BankCache(x, hidden)
 
-    def update(self, cache: BankCache, err: np.ndarray, lr: np.ndarray) -> None:
+    def update(self, cache: BankCache, err: np.ndarray, lr: np.ndarray, hidden_gain: np.ndarray | None = None) -> None:
         """
-        One normalised gradient step on ``0.5 * err**2`` per sample, summed over the samples, in place.
+        One batch-normalised gradient step on ``0.5 * err**2`` (see the module docstring), in place.
 
         :param cache: from :meth:`forward` on the same weights; its first ``n`` rows are used
         :param err: ``(n, A)`` target minus output; 0 leaves an approximator unchanged for that sample
         :param lr: ``(A,)`` learning rate of each approximator
+        :param hidden_gain: ``(A,)`` factor on each approximator's hidden-layer step (MLP heads only; None: 1).
+            An approximator whose outputs are in units of ``sigma`` takes ``1 / sigma**2`` here, so that its
+            hidden layer moves as if its targets were divided by ``sigma`` (see :class:`sb3_aac.SarsaAAC`).
         """
         n = len(err)
         x = cache.x[:n]
-        x_norm = 1.0 / (1.0 + np.einsum("nf,nf->n", x, x))  # (n,)
         g = err * lr  # (n, A)
         if not self.mlp:
-            g *= x_norm[:, None]
-            self.w += g.T @ x
-            self.b += g.sum(0)
+            weights, bias = step_normalisers(x)
+            self.w += (g * weights[:, None]).T @ x
+            self.b += (g * bias[:, None]).sum(0)
             return
         h = cache.hidden[:n]  # (n, A, H)
+        x_weights, x_bias = step_normalisers(x)
         # Backpropagate through the old output weights before changing them.
-        g_hidden = (g[:, :, None] * self.w2) * (1.0 - h * h) * x_norm[:, None, None]  # (n, A, H)
-        g_out = g / (1.0 + np.einsum("nah,nah->na", h, h))  # (n, A)
-        self.w2 += np.einsum("na,nah->ah", g_out, h)
-        self.b2 += g_out.sum(0)
-        g_hidden = g_hidden.reshape(n, -1)
-        self.w1_flat += g_hidden.T @ x
-        self.b1_flat += g_hidden.sum(0)
+        g_hidden = g if hidden_gain is None else g * hidden_gain
+        g_hidden = (g_hidden[:, :, None] * self.w2) * (1.0 - h * h)  # (n, A, H)
+        h_weights, h_bias = step_normalisers(h)  # (n, A) each
+        self.w2 += np.einsum("na,nah->ah", g * h_weights, h)
+        self.b2 += (g * h_bias).sum(0)
+        self.w1_flat += (g_hidden.reshape(n, -1) * x_weights[:, None]).T @ x
+        self.b1_flat += (g_hidden.reshape(n, -1) * x_bias[:, None]).sum(0)
+
+
+def step_normalisers(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Per-sample factors of a layer's weight step and bias step for a batch of that layer's inputs.
+
+    For inputs ``x`` ``(n, ..., F)`` (one layer input per sample, and per approximator if there are middle axes),
+    with ``w_i = 1 / (1 + ||x_i||**2)`` (normalised LMS), the weight step of sample ``i`` is scaled by
+    ``w_i / c_w`` and its bias step by ``w_i / c_b``, where, with ``alpha = mean_i w_i ||x_i||**2`` (the weights'
+    share of a single sample's step; the bias has the rest, ``w_i``),
+
+    - ``c_w = max(1, G_w / alpha)``, ``G_w = max_i sqrt(w_i) |x_i| . sum_j sqrt(w_j) |x_j|``: Gershgorin's bound on
+      the largest eigenvalue of the batch's normalised Gram matrix ``sqrt(w_i w_j) x_i . x_j``;
+    - ``c_b = max(1, sum_j w_j / (1 - alpha))``: that eigenvalue for the bias's constant input.
+
+    The largest eigenvalue of the whole batch step is then at most ``alpha + (1 - alpha) = 1`` times the rate, so
+    the summed step is non-expansive for rates in ``(0, 1]`` whatever ``n`` and ``F``. For one sample both factors
+    are 1 (plain normalised LMS); ``n`` identical samples are averaged; samples with disjoint features keep their
+    own weight steps, and share the bias's.
+
+    :return: weight factors and bias factors, each of shape ``x.shape[:-1]``
+    """
+    energy = np.einsum("...f,...f->...", x, x)
+    w = 1.0 / (1.0 + energy)
+    root = np.sqrt(w)
+    scaled = np.abs(x) * root[..., None]
+    gram_row_sums = np.einsum("n...f,...f->n...", scaled, scaled.sum(0))
+    alpha = (w * energy).mean(0)
+    weight_batch = np.maximum(np.divide(gram_row_sums.max(0), alpha, out=np.ones_like(alpha), where=alpha > 0), 1.0)
+    bias_batch = np.maximum(w.sum(0) / (1.0 - alpha), 1.0)
+    return w / weight_batch, w / bias_batch

@@ -9,6 +9,7 @@ from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import PyTorchObs
 
 from sb3_aac.common.approximators import ApproximatorBank, BankCache, BankKernel
+from sb3_aac.common.tile_coding import TileBank, TileCache, TileKernel
 from sb3_aac.common.spaces import ParameterizedActionSpec
 
 
@@ -45,27 +46,38 @@ class SarsaAACPolicy(BasePolicy):
         rbf_width: float = 1.0,
         obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
     ):
-        if not isinstance(observation_space, spaces.Box):
-            raise ValueError(
-                f"Unsupported observation space {observation_space}: SarsaAAC policies take a Box observation "
-                "(flatten Dict/Tuple observations first, e.g. with gymnasium.wrappers.FlattenObservation)"
-            )
-        super().__init__(observation_space, action_space)
-        self.spec = ParameterizedActionSpec.from_space(action_space)
+        low, high = self._init_spaces(observation_space, action_space, obs_bounds)
         self.hidden_units, self.n_rbf, self.rbf_width = hidden_units, n_rbf, rbf_width
-        self.obs_bounds = obs_bounds
-        low, high = (observation_space.low, observation_space.high) if obs_bounds is None else obs_bounds
-        n_inputs = int(np.prod(observation_space.shape))
-        low, high = (np.broadcast_to(np.asarray(b, dtype=np.float64).ravel(), (n_inputs,)) for b in (low, high))
         if n_rbf is not None and not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
             raise ValueError(
                 f"The observation space {observation_space} has infinite bounds, so RBF centres cannot be placed: "
                 "pass policy_kwargs=dict(obs_bounds=(low, high)) with finite bounds, or use MlpPolicy"
             )
-        self.n_types, self.n_params = self.spec.n_types, self.spec.n_params
-        self.approximators = ApproximatorBank(
-            low, high, self.n_types + self.n_params + 1, n_rbf=n_rbf, rbf_width=rbf_width, hidden_units=hidden_units
+        self._init_bank(
+            ApproximatorBank(low, high, self.n_outputs, n_rbf=n_rbf, rbf_width=rbf_width, hidden_units=hidden_units)
         )
+
+    def _init_spaces(
+        self, observation_space: spaces.Space, action_space: spaces.Space, obs_bounds: tuple[np.ndarray, np.ndarray] | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Check the spaces, initialise the module, parse the action space; return the ``(D,)`` input bounds."""
+        if not isinstance(observation_space, spaces.Box):
+            raise ValueError(
+                f"Unsupported observation space {observation_space}: SarsaAAC policies take a Box observation "
+                "(flatten Dict/Tuple observations first, e.g. with gymnasium.wrappers.FlattenObservation)"
+            )
+        BasePolicy.__init__(self, observation_space, action_space)
+        self.spec = ParameterizedActionSpec.from_space(action_space)
+        self.n_types, self.n_params = self.spec.n_types, self.spec.n_params
+        self.n_outputs = self.n_types + self.n_params + 1
+        self.obs_bounds = obs_bounds
+        low, high = (observation_space.low, observation_space.high) if obs_bounds is None else obs_bounds
+        n_inputs = int(np.prod(observation_space.shape))
+        return tuple(np.broadcast_to(np.asarray(b, dtype=np.float64).ravel(), (n_inputs,)) for b in (low, high))  # type: ignore[return-value]
+
+    def _init_bank(self, bank: ApproximatorBank | TileBank) -> None:
+        """Adopt ``bank`` (``n_outputs`` approximators) and lay out its output columns."""
+        self.approximators = bank
         # Column layout of the bank's outputs.
         self.q_slice = slice(0, self.n_types)
         self.param_slice = slice(self.n_types, self.n_types + self.n_params)
@@ -85,14 +97,18 @@ class SarsaAACPolicy(BasePolicy):
             obs_bounds=self.obs_bounds,
         )
 
-    def kernel(self) -> BankKernel:
+    def kernel(self) -> BankKernel | TileKernel:
         """The numpy kernel on the current parameter storage (CPU only); cached by the bank."""
         return self.approximators.numpy_kernel()
 
-    def rebind(self) -> BankKernel:
+    def rebind(self) -> BankKernel | TileKernel:
         """Rebuild the numpy views, e.g. after assigning ``param.data`` directly."""
         self.approximators.invalidate_kernel()
         return self.approximators.numpy_kernel()
+
+    def scale_value_outputs(self, factor: float) -> None:
+        """Multiply the outputs of the action-type actor and the critic (not the parameter actor's) by ``factor``."""
+        self.approximators.scale_outputs([*range(self.n_types), self.value_index], factor)
 
     def forward(self, obs: PyTorchObs) -> th.Tensor:
         """All approximator outputs ``(n, A)`` as a tensor (column layout in the class docstring), computed by numpy."""
@@ -102,7 +118,7 @@ class SarsaAACPolicy(BasePolicy):
     def _predict(self, observation: PyTorchObs, deterministic: bool = True) -> th.Tensor:
         raise NotImplementedError("A parameterized action is not one tensor: use predict()")
 
-    def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache]:
+    def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache | TileCache]:
         """Numpy forward pass on a batch ``(n, *obs_shape)``: outputs ``(n, A)`` and the update cache."""
         obs = obs.reshape(len(obs), -1)
         if self.approximators.obs_mid.device.type == "cpu":
@@ -110,13 +126,17 @@ class SarsaAACPolicy(BasePolicy):
         return self.approximators.evaluate(obs), BankCache(np.empty((len(obs), 0)), None)
 
     def observation_batch(self, observation: np.ndarray) -> tuple[np.ndarray, bool]:
-        """``observation`` as a float64 batch ``(n, *obs_shape)``, and whether it was a batch already."""
+        """
+        ``observation`` as a float64 batch ``(n, *obs_shape)``, and whether it was a batch already.
+
+        :raises ValueError: for a wrong shape, or NaN or inf values
+        """
         obs = np.asarray(observation, dtype=np.float64)
         shape = self.observation_space.shape
-        if obs.shape == shape:
-            return obs.reshape(1, *shape), False
-        if obs.shape[1:] == shape:
-            return obs, True
+        if obs.shape == shape or obs.shape[1:] == shape:
+            if not np.isfinite(obs).all():
+                raise ValueError(f"The observation holds NaN or inf values: {observation}")
+            return (obs.reshape(1, *shape), False) if obs.shape == shape else (obs, True)
         raise ValueError(
             f"Error: Unexpected observation shape {obs.shape} for Box environment, "
             f"please use {shape} or (n_env, {', '.join(map(str, shape))}) for the observation shape."
@@ -228,3 +248,50 @@ class RbfPolicy(SarsaAACPolicy):
         obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
     ):
         super().__init__(observation_space, action_space, hidden_units, n_rbf, rbf_width, obs_bounds)
+
+
+class TilePolicy(SarsaAACPolicy):
+    """
+    Tile coding over groups of inputs with a linear output (:mod:`sb3_aac.common.tile_coding`; not in the paper):
+    features that combine inputs, so values such as "heading relative to the target direction" are representable,
+    still closed-form and sparse (training and decisions cost ``O(n_groups * n_tilings)`` per approximator).
+    The default groups, every input and every pair of inputs, need no knowledge of the inputs.
+
+    :param observation_space: A ``Box`` observation space with finite bounds (or give ``obs_bounds``)
+    :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
+    :param tile_groups: Groups of (flattened) input indices tiled jointly, e.g. ``[(0,), (1,), (0, 1)]``; None for
+        every input and every pair
+    :param tiles_per_input: Tiles across each input's range per tiling (8, chosen by us)
+    :param n_tilings: Offset tilings per group (8, chosen by us)
+    :param obs_bounds: ``(low, high)`` where the grids start and end; defaults to the observation space's bounds
+    """
+
+    def __init__(
+        self,
+        observation_space: spaces.Space,
+        action_space: spaces.Space,
+        tile_groups: list[tuple[int, ...]] | None = None,
+        tiles_per_input: int = 8,
+        n_tilings: int = 8,
+        obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    ):
+        # Not SarsaAACPolicy.__init__: that one builds a dense bank.
+        low, high = self._init_spaces(observation_space, action_space, obs_bounds)
+        if not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
+            raise ValueError(
+                f"The observation space {observation_space} has infinite bounds, so tiles cannot be placed: "
+                "pass policy_kwargs=dict(obs_bounds=(low, high)) with finite bounds"
+            )
+        self.hidden_units, self.n_rbf = None, None
+        self.tile_groups, self.tiles_per_input, self.n_tilings = tile_groups, tiles_per_input, n_tilings
+        self._init_bank(TileBank(low, high, self.n_outputs, tile_groups, tiles_per_input, n_tilings))
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        return dict(
+            observation_space=self.observation_space,
+            action_space=self.action_space,
+            tile_groups=self.tile_groups,
+            tiles_per_input=self.tiles_per_input,
+            n_tilings=self.n_tilings,
+            obs_bounds=self.obs_bounds,
+        )

@@ -1,9 +1,12 @@
 from __future__ import annotations
 
+import math
 import sys
 import time
 import zipfile
 from collections import deque
+from collections.abc import Mapping
+from types import MappingProxyType
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -13,14 +16,19 @@ from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
+from sb3_aac.common.array_env import array_path
 from sb3_aac.common.model_files import check_model_file
-from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy
+from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
+# The info of a lane whose episode goes on, on the array path (read-only, shared by those lanes).
+_NO_INFO: Mapping[str, Any] = MappingProxyType({})
 
 TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
 # Schedules are re-evaluated whenever training progress has moved by this much (0.1%), not at every step.
 SCHEDULE_RESOLUTION = 1e-3
+# The weights are checked (and kept as the last finite ones) every this many steps.
+CHECK_INTERVAL = 256
 
 
 def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator) -> np.ndarray:
@@ -73,23 +81,46 @@ class SarsaAAC(BaseAlgorithm):
     training. Executed parameters are clipped to the action space's bounds. Schedules (exploration and learning
     rates) are re-evaluated every 0.1% of training progress rather than at every step.
 
-    Every approximator takes normalised steps (see :mod:`sb3_aac.common.approximators`): a learning rate of 1
-    moves a linear approximator's output onto its target for that sample, so rates lie in ``(0, 1]``.
+    Every approximator takes normalised steps (see :mod:`sb3_aac.common.approximators`): for one sample a learning
+    rate of 1 moves a linear approximator's output onto its target, and for a batch of lanes the summed step is
+    divided by a bound on how much the lanes' steps add up, so any rate in ``(0, 1]`` is stable whatever the number
+    of lanes or features. Rates are validated to lie in ``(0, 1]``.
+
+    Reward units do not matter: ``return_scale`` is the root mean square of the lanes' discounted returns
+    (``G <- gamma * G + r``, reset at episode ends) over all steps so far. When it first becomes non-zero, the
+    initial (random) Q and V weights are multiplied by it, and the hidden layers of the Q and V approximators
+    (MLP heads) take steps divided by ``return_scale**2``, i.e. they learn as if the targets were in units of
+    ``return_scale``; linear heads and output layers are unit-free by construction, and CACLA only reads the sign
+    of ``delta``. So multiplying every reward by ``c > 0`` multiplies Q, V and ``return_scale`` by ``c`` and
+    leaves every decision unchanged (up to rounding). The Boltzmann temperature is in units of ``return_scale``.
+
+    Divergence: every forward pass of training is checked for non-finite outputs before an action is chosen
+    from it, and the weights are checked every ``CHECK_INTERVAL`` steps, when a copy of them is kept. On a
+    non-finite value the weights are restored to that copy and a ``FloatingPointError`` names the approximators;
+    ``save`` after it saves a usable model.
+
+    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; then
+    ``actions`` in the callbacks' locals is the pair (types, scaled parameters) and ``infos`` holds dicts only for
+    the lanes whose episode ended. Other envs are stepped with SB3's ``env.step``.
     All updates are closed-form numpy on the CPU, vectorised over environments; ``device`` only says where the
     parameters are stored between ``learn()`` calls. Callbacks run after ``env.step`` and before that step's
     update.
 
-    The paper gives no numbers for any hyperparameter; every default below was chosen by us.
+    The paper gives no numbers for any hyperparameter; every default below was chosen by us. The learning rates
+    (0.5) were chosen among 0.1, 0.3, 0.5 and 1.0 by the greedy scores of ``benchmarks/learning.py`` (one seed) on
+    the toy env and RoboCupDribblePaper-v0 with RBF and tile policies: 0.5 was the best or within 10 % of it on
+    each, while 1.0 lost 40 % with tiles on the toy env and 0.1 lost half the distance with RBFs on the paper env.
+    MLP(2) on the paper env did better with 1.0 (20.4 m after 200k steps against 16.7 m after 150k with 0.5).
 
     :param policy: The policy model to use (MlpPolicy, RbfMlpPolicy, RbfPolicy)
     :param env: The environment to learn from (if registered in Gym, can be str)
     :param learning_rate: Critic learning rate (normalised, in ``(0, 1]``), or a schedule of the progress
-        remaining (from 1 to 0)
+        remaining (from 1 to 0) whose values at 1 and 0 are in ``(0, 1]``
     :param q_learning_rate: Action-type actor learning rate, or a schedule
     :param param_learning_rate: Parameter actor learning rate, or a schedule
     :param gamma: The discount factor
     :param type_exploration: ``"epsilon_greedy"``, or ``"boltzmann"`` (softmax over Q with temperature given by
-        the exploration schedule, in units of Q)
+        the exploration schedule, in units of ``return_scale``)
     :param exploration_fraction: Fraction of the training period over which the exploration rate and the
         parameter noise decay
     :param exploration_initial_eps: Initial epsilon (or temperature for Boltzmann exploration)
@@ -113,6 +144,7 @@ class SarsaAAC(BaseAlgorithm):
         "MlpPolicy": MlpPolicy,
         "RbfMlpPolicy": RbfMlpPolicy,
         "RbfPolicy": RbfPolicy,
+        "TilePolicy": TilePolicy,
     }
     policy: SarsaAACPolicy
 
@@ -120,9 +152,9 @@ class SarsaAAC(BaseAlgorithm):
         self,
         policy: str | type[SarsaAACPolicy],
         env: GymEnv | str | None,
-        learning_rate: float | Schedule = 0.1,
-        q_learning_rate: float | Schedule = 0.1,
-        param_learning_rate: float | Schedule = 0.1,
+        learning_rate: float | Schedule = 0.5,
+        q_learning_rate: float | Schedule = 0.5,
+        param_learning_rate: float | Schedule = 0.5,
         gamma: float = 0.9,
         type_exploration: str = "epsilon_greedy",
         exploration_fraction: float = 0.5,
@@ -167,20 +199,33 @@ class SarsaAAC(BaseAlgorithm):
         self.exploration_final_eps = exploration_final_eps
         self.param_noise_initial = param_noise_initial
         self.param_noise_final = param_noise_final
+        if isinstance(info_keywords, str) or not all(isinstance(key, str) for key in info_keywords):
+            raise ValueError(
+                f"info_keywords must be a tuple of info keys (str), got {info_keywords!r}; "
+                f"for one key write ({info_keywords!r},)"
+            )
         self.info_keywords = tuple(info_keywords)
         if _init_setup_model:
             self._setup_model()
 
     def _check_hyperparameters(self) -> None:
+        for name in ("learning_rate", "q_learning_rate", "param_learning_rate"):
+            rate = getattr(self, name)
+            values = (rate(1.0), rate(0.0)) if callable(rate) else (rate,)
+            if not all(isinstance(v, (int, float, np.floating)) and 0 < v <= 1 for v in values):
+                raise ValueError(
+                    f"{name} must be in (0, 1] (a normalised step; 1 lands one sample on its target), got "
+                    f"{values[0] if len(values) == 1 else f'a schedule from {values[0]} to {values[1]}'}"
+                )
         if self.type_exploration not in TYPE_EXPLORATIONS:
             raise ValueError(f"Unknown type_exploration {self.type_exploration!r}, valid values: {list(TYPE_EXPLORATIONS)}")
-        if not 0 <= self.gamma <= 1:
+        if not (isinstance(self.gamma, (int, float, np.floating)) and 0 <= self.gamma <= 1):
             raise ValueError(f"gamma must be in [0, 1], got {self.gamma}")
         if not 0 < self.exploration_fraction <= 1:
             raise ValueError(f"exploration_fraction must be in (0, 1], got {self.exploration_fraction}")
         for name in ("exploration_initial_eps", "exploration_final_eps", "param_noise_initial", "param_noise_final"):
-            if not getattr(self, name) >= 0:
-                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+            if not (isinstance(getattr(self, name), (int, float, np.floating)) and 0 <= getattr(self, name) < math.inf):
+                raise ValueError(f"{name} must be a finite number >= 0, got {getattr(self, name)!r}")
         if self.type_exploration == "epsilon_greedy" and max(self.exploration_initial_eps, self.exploration_final_eps) > 1:
             raise ValueError("epsilon-greedy exploration rates must be <= 1")
 
@@ -199,6 +244,13 @@ class SarsaAAC(BaseAlgorithm):
         self.policy = self.policy.to(self.device)
         # The action a' chosen at _last_obs and not yet executed: (obs (n, D), k (n,), scaled params (n, P)).
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        # Count and sum of squares of the lanes' discounted returns so far; return_scale = sqrt(sum / count).
+        # Kept when load() calls this after restoring them (0 until the first non-zero reward).
+        self._return_moments = getattr(self, "_return_moments", np.zeros(2))
+        self.return_scale = getattr(self, "return_scale", 0.0)
+        # Whether the Q and V weights are in return units yet. A model saved before return scaling existed (loaded
+        # with timesteps but without this flag) has trained weights in reward units: they must not be rescaled.
+        self._value_units_set = getattr(self, "_value_units_set", self.num_timesteps > 0)
         self._reset_keyword_buffers()
         self._reset_train_stats()
 
@@ -213,6 +265,7 @@ class SarsaAAC(BaseAlgorithm):
             *super()._excluded_save_params(),
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
             *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
+            *("_hidden_gain", "_lane_returns", "_finite_weights"),
             "_ep_keyword_buffers",
         ]
 
@@ -221,7 +274,10 @@ class SarsaAAC(BaseAlgorithm):
     def _explore(self, out: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Exploratory types ``(n,)`` and scaled, clipped parameters ``(n, P)`` from bank outputs ``(n, A)``."""
         policy = self.policy
-        k = select_types(out[:, policy.q_slice], self.exploration_rate, self.type_exploration, self._rng)
+        rate = self.exploration_rate
+        if self.type_exploration == "boltzmann" and self.return_scale > 0:
+            rate *= self.return_scale  # the temperature is in units of the return scale
+        k = select_types(out[:, policy.q_slice], rate, self.type_exploration, self._rng)
         params = out[:, policy.param_slice]
         if self.param_noise > 0:
             # Not Generator.normal(params, ...): with an array mean it costs several times more.
@@ -296,12 +352,18 @@ class SarsaAAC(BaseAlgorithm):
             self._pending = (obs, *self._explore(self._kernel.forward(obs)[0]))
 
         self._update_schedules()
+        self._keep_finite_weights()
+        array_env = array_path(env)
         callback.on_rollout_start()
         try:
             while self.num_timesteps < total_timesteps:
                 _, k, params = self._pending
-                actions = self.policy.spec.to_env(k, params)
-                new_obs, rewards, dones, infos = env.step(actions)
+                if array_env is None:
+                    actions = self.policy.spec.to_env(k, params)
+                    new_obs, rewards, dones, infos = env.step(actions)
+                else:
+                    actions = (k, params)
+                    new_obs, rewards, dones, infos = self._step_arrays(array_env, k, params)
                 self.num_timesteps += env.num_envs
 
                 callback.update_locals(locals())
@@ -310,9 +372,11 @@ class SarsaAAC(BaseAlgorithm):
                     self._last_obs, self._last_episode_starts, self._pending = new_obs, dones, None
                     break
 
-                self._update_info_buffer(infos, dones)
                 self._update_current_progress_remaining(self.num_timesteps, total_timesteps)
                 any_done = dones.any()
+                if any_done:  # episode statistics and success flags exist only where an episode ended
+                    ended = np.flatnonzero(dones)
+                    self._update_info_buffer([infos[i] for i in ended], dones[ended])
                 self._train_step(new_obs, rewards, dones, infos, any_done)
                 self._last_obs, self._last_episode_starts = new_obs, dones
                 if any_done:
@@ -324,6 +388,24 @@ class SarsaAAC(BaseAlgorithm):
         callback.on_rollout_end()
         callback.on_training_end()
         return self
+
+    def _step_arrays(
+        self, env: Any, k: np.ndarray, params: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
+        """
+        One step on the array path (:mod:`sb3_aac.common.array_env`), returned as SB3's ``VecEnv.step`` would:
+        ``info`` dicts are built only for the lanes whose episode ended (the others share one empty dict).
+        """
+        step = env.step_arrays(k, self.policy.spec.unscale(params))
+        dones = step.terminated | step.truncated
+        infos: list[Mapping[str, Any]] = [_NO_INFO] * len(dones)
+        for i in np.flatnonzero(dones):
+            info = {key: values[i] for key, values in step.episode_info.items()}
+            info["episode"] = {"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])}
+            info["terminal_observation"] = step.terminal_observations[i]
+            info["TimeLimit.truncated"] = bool(step.truncated[i])
+            infos[i] = info
+        return step.observations, step.rewards, dones, infos
 
     def _update_schedules(self) -> None:
         """Evaluate the exploration and learning-rate schedules at the current progress."""
@@ -356,8 +438,13 @@ class SarsaAAC(BaseAlgorithm):
             batch = np.concatenate((obs, next_obs, terminal_obs))
         else:
             batch = np.concatenate((obs, next_obs))
+        rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
+        # Before the forward pass: it may put the weights into return units.
+        self._track_return_scale(rewards, dones)
         # One forward pass for s (weights as they are now), s' and the terminal observations.
         out, cache = kernel.forward(batch)
+        if not math.isfinite(out.sum()):  # one reduction catches NaN and inf before an action is chosen from them
+            self._on_non_finite_outputs(batch)
         current, following = out[:n], out[n : 2 * n]
         next_k, next_params = self._explore(following)
         v_next = following[:, vi]
@@ -368,7 +455,6 @@ class SarsaAAC(BaseAlgorithm):
             q_next[truncated] = terminal[np.arange(len(truncated)), self._explore(terminal)[0]]
             discount[truncated] = gamma
 
-        rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
         delta = rewards + discount * v_next - current[:, vi]
         q_error = rewards + discount * q_next - current[rows, k]
         err = np.zeros_like(current)
@@ -376,13 +462,61 @@ class SarsaAAC(BaseAlgorithm):
         # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0.
         err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
         err[:, vi] = delta
-        kernel.update(cache, err, self._lr)
+        kernel.update(cache, err, self._lr, self._hidden_gain)
         self._n_updates += 1
 
         self._pending = (next_obs, next_k, next_params)
         self._td_chunks.append((delta, q_error, k))
-        if len(self._td_chunks) >= 256:
+        if len(self._td_chunks) >= CHECK_INTERVAL:
             self._flush_td_chunks()
+            self._keep_finite_weights()
+
+    # ------------------------------------------------------------------ return scale
+
+    def _track_return_scale(self, rewards: np.ndarray, dones: np.ndarray) -> None:
+        """
+        Fold this step's per-lane discounted returns into ``return_scale``; on its first non-zero value, express
+        the initial Q and V weights in those units (see the class docstring).
+        """
+        lane_returns = self._lane_returns
+        if lane_returns is None or len(lane_returns) != len(rewards):
+            lane_returns = self._lane_returns = np.zeros(len(rewards))
+        lane_returns *= self.gamma
+        lane_returns += rewards
+        self._return_moments += (len(rewards), lane_returns @ lane_returns)
+        lane_returns[dones] = 0.0
+        count, square_sum = self._return_moments
+        scale = math.sqrt(square_sum / count)
+        if scale > 0 and not self._value_units_set:
+            self.policy.scale_value_outputs(scale)
+            self._value_units_set = True
+        if scale > 0:
+            self.return_scale = scale
+            self._set_return_units()
+
+    def _set_return_units(self) -> None:
+        """The hidden-layer gains of the Q and V approximators for the current ``return_scale``."""
+        unit = self.return_scale if self.return_scale > 0 else 1.0
+        policy = self.policy
+        self._hidden_gain[policy.q_slice] = self._hidden_gain[policy.value_index] = unit**-2
+
+    # ------------------------------------------------------------------ divergence
+
+    def _keep_finite_weights(self) -> None:
+        """Check the weights and keep a copy of them as the last finite ones (restored on divergence)."""
+        self._check_weights()
+        self._finite_weights = {name: p.detach().clone() for name, p in self.policy.approximators.named_parameters()}
+        self._finite_weights_timestep = self.num_timesteps
+
+    def _on_non_finite_outputs(self, batch: np.ndarray) -> None:
+        """Name what made the outputs non-finite, restore the last finite weights, and raise."""
+        self._check_weights()
+        if not np.isfinite(batch).all():
+            raise ValueError(
+                f"The env returned a non-finite (nan or inf) observation by timestep {self.num_timesteps}; "
+                "SarsaAAC needs finite observations (the weights are unchanged)"
+            )
+        self._raise_divergence("the outputs (weights finite, but too large for the observations)")
 
     # ------------------------------------------------------------------ statistics and logging
 
@@ -395,6 +529,11 @@ class SarsaAAC(BaseAlgorithm):
         self._lr = np.zeros(self.policy.value_index + 1)
         self._rows = np.arange(self.n_envs)
         self._td_chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self._hidden_gain = np.ones_like(self._lr)
+        self._set_return_units()
+        self._lane_returns: np.ndarray | None = None
+        self._finite_weights: dict[str, th.Tensor] | None = None
+        self._finite_weights_timestep = 0
         # Sums since the last dump: n, delta, |delta|, delta^2, q_error^2, count(delta > 0); type counts.
         self._train_stats = np.zeros(6)
         self._type_counts = np.zeros(n_types, dtype=np.int64)
@@ -415,11 +554,7 @@ class SarsaAAC(BaseAlgorithm):
         self._type_counts += np.bincount(k, minlength=len(self._type_counts))
 
     def _check_weights(self) -> None:
-        arrays = [p.detach().cpu().numpy() for p in self.policy.approximators.parameters()]
-        n_outputs = self.policy.value_index + 1
-        finite = np.ones(n_outputs, dtype=bool)
-        for array in arrays:
-            finite &= np.isfinite(array.reshape(n_outputs, -1)).all(1)
+        finite = self.policy.approximators.finite_outputs()
         if not finite.all():
             policy = self.policy
             names = []
@@ -432,8 +567,19 @@ class SarsaAAC(BaseAlgorithm):
             self._raise_divergence("the weights of " + " and ".join(names))
 
     def _raise_divergence(self, what: str) -> None:
+        """Restore the last finite weights and raise a ``FloatingPointError`` saying so."""
+        restored = "the weights were not restored (no finite copy)"
+        if self._finite_weights is not None:
+            with th.no_grad():
+                for name, p in self.policy.approximators.named_parameters():
+                    p.copy_(self._finite_weights[name])
+            restored = (
+                f"the weights were restored to those of timestep {self._finite_weights_timestep}, "
+                "so save() keeps a usable model"
+            )
+        self._pending = None  # choose afresh with the restored weights
         raise FloatingPointError(
-            f"SarsaAAC diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}. "
+            f"SarsaAAC diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}; {restored}. "
             f"Lower the learning rates (learning_rate={self.learning_rate}, q_learning_rate={self.q_learning_rate}, "
             f"param_learning_rate={self.param_learning_rate}; normalised rates should be in (0, 1]), lower gamma, "
             "or rescale the rewards; also check that the env returns finite rewards and observations."

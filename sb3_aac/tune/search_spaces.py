@@ -87,6 +87,9 @@ SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
         {"n_rbf": IntDistribution(5, 30), "hidden_units": IntDistribution(2, 20, log=True), "rbf_width": _RBF_WIDTH},
     ),
     ("sarsa_aac", "RbfPolicy"): SearchSpace(_SARSA_AAC, {"n_rbf": IntDistribution(5, 80), "rbf_width": _RBF_WIDTH}),
+    ("sarsa_aac", "TilePolicy"): SearchSpace(
+        _SARSA_AAC, {"tiles_per_input": IntDistribution(4, 16), "n_tilings": IntDistribution(4, 16)}
+    ),
 }
 
 
