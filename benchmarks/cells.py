@@ -1,15 +1,22 @@
-"""The benchmark's result files (``DIR/cells/<cell_id>.json``, ``DIR/reliability.json``): where they live, and reading
-them so that a damaged file is named and skipped (or recomputed), never fatal and never taken for a finished cell.
+"""The benchmark's result files (``DIR/cells/<cell_id>.json``, ``DIR/reliability.json``, models, error files): where
+they live, writing them atomically, the per-cell lock, and reading them so that a damaged file is named and skipped
+(or recomputed), never fatal and never taken for a finished cell.
 
-Light on purpose (json and pathlib): the runner and the report both read results through here.
+Light on purpose (no torch or SB3): the runner and the report both read and write results through here.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
+
+from sb3_aac.common import output_files
+from sb3_aac.common.output_files import replaced_atomically
 
 RESULT_KEYS = ("cell_id", "cell")  # every cell file has these, and "final" (trained) or "references"
 
@@ -77,3 +84,47 @@ def load_cells(out: Path) -> list[dict[str, Any]]:
     for message in damaged:
         warnings.warn(f"{message}; skipped", stacklevel=2)
     return results
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` atomically (flushed to disk before the rename)."""
+    with replaced_atomically(path) as tmp:
+        tmp.write_text(text)
+
+
+def atomic_write_json(path: Path, data: Any) -> None:
+    """Serialise first (an unserialisable value raises before anything is written), then write atomically."""
+    atomic_write_text(path, json.dumps(data, indent=1, allow_nan=False) + "\n")
+
+
+def save_model_atomic(model: Any, path: Path) -> None:
+    with replaced_atomically(path, suffix=".zip") as tmp:
+        model.save(tmp)
+
+
+
+def remove_stale_temporaries(out: Path) -> None:
+    """Temporary files a killed process left behind; a live process's temporaries (a concurrent run) stay."""
+    for sub in ("cells", "models", "errors"):
+        output_files.remove_stale_temporaries(out / sub)
+
+
+@contextlib.contextmanager
+def cell_lock(out: Path, cell_id: str) -> Iterator[bool]:
+    """
+    Hold ``DIR/locks/<cell_id>.lock`` while a cell runs: yields False if another live process holds it (that
+    cell is running elsewhere, so its TensorBoard folder and temporaries must not be touched). The lock is an
+    ``flock``, released by the system when its holder dies, so a killed run never blocks a cell.
+    """
+    lock_dir = out / "locks"
+    lock_dir.mkdir(parents=True, exist_ok=True)
+    with open(lock_dir / f"{cell_id}.lock", "a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            yield False
+            return
+        try:
+            yield True
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)

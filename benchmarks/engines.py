@@ -1,6 +1,6 @@
 """Engines that run a grid's cells somewhere else than the driver's own process pool: Ray (issue 13 item 7).
 
-:func:`benchmarks.run.run_grid` hands the cells still to run to an engine (``engine.run(cells, out, record)``);
+:func:`benchmarks.execution.run_grid` hands the cells still to run to an engine (``engine.run(cells, out, record)``);
 without one it uses its local process pool (the default for one machine). An engine calls ``record(cell_id,
 state, payload)`` once per cell, as the local pool does: ``state`` is ``"done"`` (``payload`` the cell's result
 dict) or ``"failed"`` (``payload`` the error text).
@@ -51,10 +51,10 @@ def run_cell_in_scratch(cell_data: dict[str, Any], environ: dict[str, str], scra
     on this machine; return its outcome and the files it wrote. An attempt killed with its node leaves its scratch
     directory behind on that node.
 
-    :return: ``cell_id``, ``state`` and ``payload`` (as :func:`benchmarks.run.run_cell_safely`), ``files`` (path
+    :return: ``cell_id``, ``state`` and ``payload`` (as :func:`benchmarks.execution.run_cell_safely`), ``files`` (path
         relative to the results directory -> bytes) and ``node`` (the Ray node id, if in a Ray worker)
     """
-    from benchmarks.run import run_cell_safely
+    from benchmarks.execution import run_cell_safely
 
     os.environ.update(environ)
     with tempfile.TemporaryDirectory(prefix="sb3-aac-cell-", dir=scratch_root) as scratch:
@@ -75,7 +75,7 @@ def write_cell_files(out: Path, cell_id: str, files: dict[str, bytes]) -> None:
     The cell's old TensorBoard directory goes first (a run interrupted before its cell file leaves one behind), and
     its error file once the cell has finished.
     """
-    from benchmarks.run import replaced_atomically
+    from sb3_aac.common.output_files import replaced_atomically
 
     cell_file = f"cells/{cell_id}.json"
     unexpected = [name for name in files if Path(name).is_absolute() or ".." in Path(name).parts]

@@ -22,9 +22,10 @@ import fnmatch
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from robocup_dribble import ENV_PROFILES
+
 ENV_IDS = ("RoboCupDribblePaper-v0", "RoboCupDribble-v0")
 ENV_SHORT = {"RoboCupDribblePaper-v0": "paper", "RoboCupDribble-v0": "v19"}
-ENV_PROFILE = {"RoboCupDribblePaper-v0": "v11", "RoboCupDribble-v0": "v19"}
 
 # Evaluation seeds of evaluate_dribbling: the same players, starts and noise for every cell of an env, and none of
 # them shared with training (training seeds are small integers) or with each other.
@@ -140,7 +141,7 @@ class Cell:
 
     @property
     def profile(self) -> str:
-        return ENV_PROFILE[self.env_id]
+        return ENV_PROFILES[self.env_id]
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import robocup_dribble
+from benchmarks import cells as cell_files
 from benchmarks import run as bench_run
 from benchmarks.adapters import DiscreteActionAdapter, FlatActionAdapter, baseline_env, env_action_space
 from benchmarks.presets import Cell, build_cells, select
@@ -48,7 +49,7 @@ def tiny_run(tmp_path_factory):
 def test_tiny_grid_writes_cells_models_and_tensorboard(tiny_run):
     out, cells, first, _, second = tiny_run
     assert not first["failed"] and not second["failed"]
-    results = {r["cell_id"]: r for r in bench_run.load_cells(out)}
+    results = {r["cell_id"]: r for r in cell_files.load_cells(out)}
     assert set(results) == {c.cell_id for c in cells}
     for cell in cells:
         result = results[cell.cell_id]
@@ -120,9 +121,9 @@ def test_a_failing_cell_leaves_no_result_file(tmp_path):
 
 def test_atomic_write_keeps_the_old_file_and_no_temporary(tmp_path, monkeypatch):
     path = tmp_path / "cells" / "x.json"
-    bench_run.atomic_write_json(path, {"a": 1})
+    cell_files.atomic_write_json(path, {"a": 1})
     with pytest.raises(ValueError):
-        bench_run.atomic_write_json(path, {"a": float("nan")})  # refused before writing
+        cell_files.atomic_write_json(path, {"a": float("nan")})  # refused before writing
     assert json.loads(path.read_text()) == {"a": 1}
 
     def crash(*args):
@@ -130,22 +131,22 @@ def test_atomic_write_keeps_the_old_file_and_no_temporary(tmp_path, monkeypatch)
 
     monkeypatch.setattr(os, "replace", crash)
     with pytest.raises(OSError):
-        bench_run.atomic_write_json(path, {"a": 2})
+        cell_files.atomic_write_json(path, {"a": 2})
     assert json.loads(path.read_text()) == {"a": 1}
     assert [p.name for p in path.parent.iterdir()] == ["x.json"]
 
 
 def test_a_cell_that_raises_while_writing_leaves_nothing(tmp_path, monkeypatch):
     cell = Cell(ENV_ID, "Reference", "references", eval_episodes=10, final_episodes=10)
-    real = bench_run.atomic_write_text
+    real = cell_files.atomic_write_text
 
     def write_half_then_fail(path, text):
         if path.suffix == ".json":
             # what a non-atomic writer would leave: half a file, then the process dies
-            monkeypatch.setattr(bench_run.os, "fsync", lambda fd: (_ for _ in ()).throw(KeyboardInterrupt()))
+            monkeypatch.setattr(os, "fsync", lambda fd: (_ for _ in ()).throw(KeyboardInterrupt()))
         return real(path, text)
 
-    monkeypatch.setattr(bench_run, "atomic_write_text", write_half_then_fail)
+    monkeypatch.setattr(cell_files, "atomic_write_text", write_half_then_fail)
     with pytest.raises(KeyboardInterrupt):
         bench_run.run_grid([cell], tmp_path, workers=1, progress=False)
     assert not list((tmp_path / "cells").iterdir())  # neither the result nor a temporary file

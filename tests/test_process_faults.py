@@ -129,7 +129,7 @@ def test_a_live_runs_temporaries_and_running_cell_are_left_alone(tmp_path: Path)
     dead = tmp_path / "cells" / f".{reference.cell_id}.json.sb3aac-{2**22 + 12345}.tmpabc"  # beyond pid_max: dead
     live.write_text("{")
     dead.write_text("{")
-    with bench_run.cell_lock(tmp_path, reference.cell_id) as locked:
+    with cell_files.cell_lock(tmp_path, reference.cell_id) as locked:
         assert locked
         # another "run" of the grid while this process holds the cell
         script = (

@@ -7,6 +7,7 @@ import subprocess
 
 import pytest
 
+from benchmarks import cells as cell_files
 from benchmarks import provenance
 from benchmarks import run as bench_run
 
@@ -76,7 +77,7 @@ def test_allow_dirty_is_recorded_in_every_cell(repo, tmp_path, monkeypatch):
     out = tmp_path / "out"
     status = bench_run.main(["--preset", "quick", "--only", "reference", "--out", str(out), "--workers", "1", "--allow-dirty"])
     assert status == 0
-    (cell,) = bench_run.load_cells(out)
+    (cell,) = cell_files.load_cells(out)
     record = cell["provenance"]
     assert record["allow_dirty"] is True and record["git_commit"].endswith("+dirty") and record["changed_files"] == ["code.py"]
     (entry,) = provenance.invocations(out)

@@ -1,0 +1,281 @@
+"""Running cells: train and evaluate one cell and write its files (:func:`run_cell`), safely under its lock
+(:func:`run_cell_safely`), and the grid of them in worker processes that end with their driver (:func:`run_grid`)."""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+import shutil
+import threading
+import time
+import traceback
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from pathlib import Path
+from typing import Any
+
+# One BLAS thread per process: with two workers on two cores, OpenBLAS's own threads make some SarsaAAC configs
+# (RbfMlpPolicy with 20 hidden units) up to 7x slower. Set before numpy is imported here; spawned workers inherit it.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+import torch as th  # noqa: E402
+from stable_baselines3.common.logger import configure  # noqa: E402
+
+import robocup_dribble  # noqa: E402, F401  (registers the env ids)
+from benchmarks import cells  # noqa: E402
+from benchmarks.cells import atomic_write_json, atomic_write_text, cell_lock, remove_stale_temporaries, save_model_atomic  # noqa: E402
+from benchmarks.engines import CellEngine  # noqa: E402
+from benchmarks.evaluation import DribbleEvalCallback, predict_microseconds, report_summary  # noqa: E402
+from benchmarks.platform_info import loadavg, machine, versions  # noqa: E402
+from benchmarks.presets import BASELINES, EVAL_SEED, FINAL_SEED, ON_POLICY, SARSA_CONFIGS, SARSA_N_ENVS, Cell  # noqa: E402
+from benchmarks.provenance import cell_provenance  # noqa: E402
+from robocup_dribble import DribbleVecEnv  # noqa: E402
+from robocup_dribble.evaluation import evaluate_dribbling, running_ceiling  # noqa: E402
+
+PARENT_POLL_SECONDS = 0.2  # how often a worker checks that the driver still lives
+
+
+def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
+    """The untrained model, the object evaluation calls ``predict`` on, and the ``log_interval`` for ``learn``."""
+    if cell.algo == "SarsaAAC":
+        from sb3_aac import SarsaAAC
+
+        _, policy, policy_kwargs = SARSA_CONFIGS[cell.config]
+        overrides = dict(cell.overrides)
+        n_envs = overrides.pop("n_envs", SARSA_N_ENVS)
+        env = DribbleVecEnv(n_envs, profile=cell.profile)
+        model = SarsaAAC(policy, env, seed=cell.seed, policy_kwargs=dict(policy_kwargs), **overrides)
+        return model, model, 100  # dump the rollout/train keys every 100 episodes
+    from benchmarks.adapters import adapter_for, build_baseline
+
+    model = build_baseline(cell.env_id, cell.algo, cell.seed, cell.overrides)
+    # On-policy: log_interval counts rollouts (about every 2048 transitions); off-policy: episodes.
+    log_interval = max(1, 2048 // (model.n_steps * model.n_envs)) if cell.algo in ON_POLICY else 100
+    return model, adapter_for(model, cell.algo, cell.env_id), log_interval
+
+
+def algo_config(cell: Cell) -> dict[str, Any]:
+    """The hyperparameters a cell ran with, as recorded in its file."""
+    if cell.algo == "SarsaAAC":
+        _, policy, policy_kwargs = SARSA_CONFIGS[cell.config]
+        return {"policy": policy, "policy_kwargs": policy_kwargs, "n_envs": SARSA_N_ENVS, "other": "SarsaAAC defaults", **cell.overrides}
+    if cell.algo == "Reference":
+        return {}
+    spec = BASELINES[cell.algo]
+    return {"policy": "MlpPolicy", **spec, "kwargs": {**spec["kwargs"], **cell.overrides}, "other": "SB3 defaults"}
+
+
+def run_reference(cell: Cell) -> dict[str, Any]:
+    """The no-learning references of an env: the hand-coded dribbler and the physical running ceiling."""
+    from robocup_dribble.dribbler import HandCodedDribbler
+
+    start = time.perf_counter()
+    dribbler = HandCodedDribbler(profile=cell.profile)
+    curve_set = report_summary(evaluate_dribbling(dribbler, cell.eval_episodes, cell.profile, EVAL_SEED))
+    final = report_summary(evaluate_dribbling(dribbler, cell.final_episodes, cell.profile, FINAL_SEED))
+    handcoded_s = time.perf_counter() - start
+    ceiling = running_ceiling(cell.profile)
+    return {
+        "handcoded": {
+            "eval": curve_set,
+            "final": final,
+            "predict_us": predict_microseconds(dribbler, cell.profile),
+            "wall_s": round(handcoded_s, 3),
+        },
+        "ceiling": {
+            "players": len(ceiling),
+            "mean": float(np.mean(ceiling)),
+            "median": float(np.median(ceiling)),
+            "min": float(np.min(ceiling)),
+            "max": float(np.max(ceiling)),
+            "cycles": 35,
+        },
+    }
+
+
+def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
+    """Train and evaluate one cell and write its files; returns its result. Runs in a worker process."""
+    th.set_num_threads(1)
+    cell = Cell.from_dict(cell_data)
+    out_dir = Path(out)
+    started = time.time()
+    start = time.perf_counter()
+    load_start = loadavg()
+    result: dict[str, Any] = {
+        "cell_id": cell.cell_id,
+        "cell": cell.to_dict(),
+        "family": cell.family,
+        "algo_config": algo_config(cell),
+        "eval_seed": EVAL_SEED,
+        "final_seed": FINAL_SEED,
+        "command": os.environ.get("SB3_AAC_BENCH_COMMAND", ""),
+        "versions": versions(),
+        "provenance": cell_provenance(),
+        "machine": machine(),
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(started)),
+    }
+    if cell.algo == "Reference":
+        result["references"] = run_reference(cell)
+    else:
+        tb_dir = out_dir / "tb" / cell.cell_id
+        shutil.rmtree(tb_dir, ignore_errors=True)  # a run interrupted before its cell file was written
+        model, policy, log_interval = build_model(cell)
+        model.set_logger(configure(str(tb_dir), ["tensorboard"]))
+        callback = DribbleEvalCallback(policy, cell.profile, cell.eval_every, cell.eval_episodes)
+        model.learn(cell.budget, callback=callback, log_interval=log_interval)
+        if callback.curve[-1]["env_steps"] < model.num_timesteps:
+            callback.evaluate()  # the curve ends where training ended
+        train_wall = time.perf_counter() - start
+        final = report_summary(evaluate_dribbling(policy, cell.final_episodes, cell.profile, FINAL_SEED))
+        for key in ("distance_mean", "reach20_share", "ball_loss_rate"):
+            model.logger.record(f"eval/final_{key}", final[key])
+        model.logger.dump(model.num_timesteps)
+        model.logger.close()
+        model_path = out_dir / "models" / f"{cell.cell_id}.zip"
+        save_model_atomic(model, model_path)
+        result.update(
+            curve=callback.curve,
+            final=final,
+            env_steps=int(model.num_timesteps),
+            episodes=callback.episodes,
+            train_wall_s=round(train_wall, 3),
+            eval_wall_s=round(callback.eval_seconds, 3),
+            predict_us=predict_microseconds(policy, cell.profile),
+            model=str(model_path.relative_to(out_dir)),
+            tensorboard=str(tb_dir.relative_to(out_dir)),
+        )
+    result["wall_s"] = round(time.perf_counter() - start, 3)
+    result["loadavg"] = {"start": load_start, "end": loadavg()}
+    atomic_write_json(cells.cell_path(out_dir, cell.cell_id), result)
+    return result
+
+
+def run_cell_safely(cell_data: dict[str, Any], out: str) -> tuple[str, str, dict[str, Any] | str]:
+    """``run_cell`` under the cell's lock, with an exception turned into ``errors/<cell_id>.txt`` and a ``"failed"``
+    status; ``"busy"`` if another live process is running the cell."""
+    cell = Cell.from_dict(cell_data)
+    error_file = Path(out) / "errors" / f"{cell.cell_id}.txt"
+    with cell_lock(Path(out), cell.cell_id) as locked:
+        if not locked:
+            return cell.cell_id, "busy", "running in another process"
+        try:
+            result = run_cell(cell_data, out)
+        except Exception:
+            text = traceback.format_exc()
+            atomic_write_text(error_file, text)
+            return cell.cell_id, "failed", text
+        with contextlib.suppress(FileNotFoundError):
+            error_file.unlink()
+    return cell.cell_id, "done", result
+
+
+def exit_with_parent(parent: int, poll_seconds: float = PARENT_POLL_SECONDS) -> threading.Thread:
+    """
+    End this process (``os._exit``) as soon as its parent ``parent`` is gone, however it ended (``kill -9``
+    included): a daemon thread polls the parent's process id, which changes when an orphan is adopted. Portable,
+    and unlike Linux's ``PR_SET_PDEATHSIG`` it does not depend on which of the parent's threads started this
+    process. ``parent`` is the id the parent had when it started us: if it died while we were still starting
+    (importing torch takes seconds), we are already adopted and exit at the first poll.
+    """
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(poll_seconds)
+        os._exit(1)
+
+    thread = threading.Thread(target=watch, name="exit-with-parent", daemon=True)
+    thread.start()
+    return thread
+
+
+def _init_worker(driver: int) -> None:
+    exit_with_parent(driver)
+    th.set_num_threads(1)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and end the running workers now (their cells' temporaries go with them)."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in list((getattr(pool, "_processes", None) or {}).values()):  # no public API before Python 3.14
+        with contextlib.suppress(OSError, ValueError):
+            process.terminate()
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(OSError, ValueError, AssertionError):
+            process.join(5)
+
+
+def estimated_cost(cell: Cell) -> float:
+    """Rough seconds of a cell (to start the longest first, so two workers finish together)."""
+    rate = {"SarsaAAC": 10000, "PPO": 1600, "A2C": 2000, "SAC": 1000, "TD3": 1300, "DDPG": 1300, "DQN": 1800}
+    return 30.0 if cell.algo == "Reference" else cell.budget / rate.get(cell.algo, 1000)
+
+
+def _summary_line(result: dict[str, Any]) -> str:
+    if "references" in result:
+        ref = result["references"]
+        return f"hand-coded {ref['handcoded']['final']['distance_mean']:.1f} m, ceiling {ref['ceiling']['mean']:.1f} m"
+    f = result["final"]
+    return (
+        f"{f['distance_mean']:.1f} m, >=20 m {100 * f['reach20_share']:.0f}%, lost {100 * f['ball_loss_rate']:.0f}% "
+        f"({result['episodes']} episodes, {result['wall_s']:.0f} s)"
+    )
+
+
+def run_grid(
+    grid: list[Cell], out: str | Path, workers: int = 2, progress: bool = True, engine: CellEngine | None = None
+) -> dict[str, list[str]]:
+    """
+    Run the cells that have no sound result file yet (a damaged one is named in a warning and computed again);
+    returns the ids ``done``, ``skipped`` (finished before), ``failed`` and ``busy`` (running in another process).
+
+    ``engine`` runs them elsewhere (:class:`benchmarks.engines.RayEngine`); None: the local process pool of ``workers``,
+    whose processes end with this process, however it ends: on an exception or interrupt here they are terminated,
+    and each worker exits by itself when this process is killed (:func:`exit_with_parent`).
+    """
+    from tqdm import tqdm
+
+    out = Path(out)
+    for sub in ("cells", "models", "tb", "errors"):
+        (out / sub).mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(out)
+    status: dict[str, list[str]] = {"done": [], "skipped": [], "failed": [], "busy": []}
+    todo = []
+    for cell in grid:
+        (status["skipped"] if cells.is_finished(out, cell) else todo).append(cell)
+    status["skipped"] = [c.cell_id for c in status["skipped"]]
+    todo.sort(key=estimated_cost, reverse=True)
+    os.environ.setdefault("SB3_AAC_BENCH_COMMAND", "(called from Python)")
+    bar = tqdm(total=len(todo), desc="cells", unit="cell", disable=not progress, dynamic_ncols=True)
+    if status["skipped"] and progress:
+        tqdm.write(f"{len(status['skipped'])} finished cells skipped, {len(todo)} to run in {out}")
+
+    def record(cell_id: str, state: str, payload: Any) -> None:
+        status[state].append(cell_id)
+        bar.update(1)
+        if progress:
+            text = {"done": _summary_line, "busy": str}.get(state, lambda p: "FAILED: " + p.strip().splitlines()[-1])(payload)
+            tqdm.write(f"{cell_id}: {text}")
+
+    try:
+        if engine is not None:
+            engine.run(todo, out, record)
+        elif workers <= 1:
+            for cell in todo:
+                record(*run_cell_safely(cell.to_dict(), str(out)))
+        else:
+            context = multiprocessing.get_context("spawn")
+            with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker, initargs=(os.getpid(),)) as pool:
+                pending = {pool.submit(run_cell_safely, cell.to_dict(), str(out)) for cell in todo}
+                try:
+                    while pending:
+                        finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                        for future in finished:
+                            record(*future.result())
+                except BaseException:
+                    _stop_workers(pool)
+                    raise
+    finally:
+        bar.close()
+    return status

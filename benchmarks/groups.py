@@ -1,0 +1,112 @@
+"""The report's view of the results: the runs of one env x algorithm x config x budget as a :class:`Group`, their
+learning curves on a common grid, and the interquartile mean (IQM) over seeds with its 95% percentile bootstrap
+interval (``scipy.stats.bootstrap``), which the tables and figures show. Verdicts come from
+:mod:`benchmarks.significance`, never from these intervals."""
+
+from __future__ import annotations
+
+import warnings
+from collections import defaultdict
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from benchmarks.presets import BASELINES, ENV_IDS, SARSA_CONFIGS, config_label
+from benchmarks.significance import IQM_TRIM, iqm
+
+INTERVAL_RESAMPLES = 2000  # bootstrap resamples of the intervals drawn and tabulated (verdicts use significance's)
+GRID_POINTS = 80
+
+
+class Group:
+    """The runs (seeds) of one env x algorithm x config x budget."""
+
+    def __init__(self, env_id: str, algo: str, config: str, budget: int, runs: list[dict[str, Any]]):
+        self.env_id, self.algo, self.config, self.budget = env_id, algo, config, budget
+        self.runs = sorted(runs, key=lambda r: r["cell"]["seed"])
+
+    @property
+    def label(self) -> str:
+        return config_label(self.algo, self.config)
+
+    @property
+    def family(self) -> str:
+        return self.runs[0]["family"]
+
+    def final(self, key: str = "distance_mean") -> np.ndarray:
+        return np.array([r["final"][key] for r in self.runs], dtype=float)
+
+    def values(self, key: str) -> np.ndarray:
+        return np.array([r[key] for r in self.runs], dtype=float)
+
+    def curve(self, x: str = "episodes", y: str = "distance_mean") -> tuple[np.ndarray, np.ndarray]:
+        """Grid ``(G,)`` over the x range every run reached, and the runs' interpolated values ``(runs, G)``."""
+        end = min(r["curve"][-1][x] for r in self.runs)
+        grid = np.linspace(0.0, end, GRID_POINTS) if end > 0 else np.zeros(1)
+        values = np.stack([np.interp(grid, [p[x] for p in r["curve"]], [p[y] for p in r["curve"]]) for r in self.runs])
+        return grid, values
+
+    def first_reaching(self, metres: float) -> list[dict[str, Any] | None]:
+        """Per run: the first curve point whose greedy mean distance is at least ``metres`` (None if never)."""
+        return [next((p for p in r["curve"] if p["distance_mean"] >= metres), None) for r in self.runs]
+
+
+def group_results(results: list[dict[str, Any]]) -> tuple[dict[str, list[Group]], dict[str, dict[str, Any]]]:
+    """Training groups per env (SarsaAAC configs in the paper's order, then baselines) and references per env."""
+    buckets: dict[tuple[str, str, str, int], list[dict[str, Any]]] = defaultdict(list)
+    references = {}
+    for r in results:
+        c = r["cell"]
+        if c["algo"] == "Reference":
+            references[c["env_id"]] = r
+        elif "final" in r:
+            buckets[(c["env_id"], c["algo"], c["config"], c["budget"])].append(r)
+    order = {name: i for i, name in enumerate([*SARSA_CONFIGS, *(a.lower() for a in BASELINES)])}
+    groups: dict[str, list[Group]] = defaultdict(list)
+    for key in sorted(buckets, key=lambda k: (k[0], order.get(k[2], 99), k[3])):
+        groups[key[0]].append(Group(*key, buckets[key]))
+    env_order = [e for e in ENV_IDS if e in groups or e in references] + sorted(set(groups) - set(ENV_IDS))
+    return {e: groups.get(e, []) for e in env_order}, references
+
+
+
+def iqm_ci(values: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """IQM over runs (axis 0) and its 95% percentile bootstrap interval; the interval is the point itself for 1 run
+    or runs that all agree."""
+    values = np.asarray(values, dtype=float)
+    point = iqm(values, axis=0)
+    if values.shape[0] < 2:
+        return point, point.copy(), point.copy()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # degenerate resamples (all runs equal) warn
+        result = stats.bootstrap(
+            (values,),
+            lambda sample, axis: stats.trim_mean(sample, IQM_TRIM, axis=axis),
+            n_resamples=INTERVAL_RESAMPLES,
+            confidence_level=0.95,
+            method="percentile",
+            axis=0,
+            vectorized=True,
+            random_state=seed,
+        )
+    low = np.where(np.isfinite(result.confidence_interval.low), result.confidence_interval.low, point)
+    high = np.where(np.isfinite(result.confidence_interval.high), result.confidence_interval.high, point)
+    return point, np.minimum(low, point), np.maximum(high, point)
+
+
+def scalar_ci(values: np.ndarray) -> tuple[float, float, float]:
+    point, low, high = iqm_ci(np.asarray(values, dtype=float)[:, None])
+    return float(point[0]), float(low[0]), float(high[0])
+
+
+def best_group(groups: list[Group], algos: tuple[str, ...], family: str | None = None) -> Group | None:
+    """The group with the highest IQM final distance among ``algos`` (and ``family``)."""
+    pool = [g for g in groups if g.algo in algos and (family is None or g.family == family)]
+    return max(pool, key=lambda g: float(iqm(g.final()))) if pool else None
+
+
+def budget_note(groups: list[Group]) -> str:
+    """The groups' env-step budgets and seed counts, SarsaAAC first (a figure title, a setup line)."""
+    parts = sorted({(g.algo == "SarsaAAC", g.budget, len(g.runs)) for g in groups}, reverse=True)
+    return "; ".join(f"{'SarsaAAC' if s else 'baselines'} {b:,} env steps x {n} seeds" for s, b, n in parts)
