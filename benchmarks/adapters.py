@@ -25,7 +25,13 @@ import robocup_dribble  # noqa: F401  (registers the env ids)
 from robocup_dribble import DribbleEnv, DribbleVecEnv
 from benchmarks.presets import BASELINES
 from sb3_aac.common.spaces import ParameterizedActionSpec
-from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction, grid_to_action, make_grid, scores_to_action
+from sb3_aac.wrappers import (
+    DiscretizeParameterizedAction,
+    FlattenParameterizedAction,
+    grid_to_action,
+    make_grid,
+    scores_to_action,
+)
 
 ALGOS: dict[str, type[BaseAlgorithm]] = {"PPO": PPO, "A2C": A2C, "SAC": SAC, "TD3": TD3, "DDPG": DDPG, "DQN": DQN}
 
@@ -43,7 +49,9 @@ class FlatActionAdapter:
 
     def convert(self, actions: np.ndarray) -> np.ndarray:
         """``(n, K + n_params)`` flat actions -> ``(n,)`` object array of env actions."""
-        k, params_scaled = scores_to_action(np.asarray(actions).reshape(-1, self.spec.n_types + self.spec.n_params), self.spec.n_types)
+        k, params_scaled = scores_to_action(
+            np.asarray(actions).reshape(-1, self.spec.n_types + self.spec.n_params), self.spec.n_types
+        )
         return self.spec.to_env(k, params_scaled)
 
     def predict(self, observation: np.ndarray, state: Any = None, episode_start: Any = None, deterministic: bool = True):
@@ -111,7 +119,9 @@ class WrappedDribbleVecEnv(VecEnvWrapper):
         if isinstance(self.wrapper, FlattenParameterizedAction):
             k, scaled = scores_to_action(np.asarray(actions).reshape(self.num_envs, -1), self.spec.n_types)
         else:
-            k, scaled = grid_to_action(np.asarray(actions).reshape(-1).astype(np.int64), self.wrapper.types, self.wrapper.params_scaled)
+            k, scaled = grid_to_action(
+                np.asarray(actions).reshape(-1).astype(np.int64), self.wrapper.types, self.wrapper.params_scaled
+            )
         return k, self.spec.unscale(scaled).astype(np.float32).astype(np.float64)
 
     def step_async(self, actions: np.ndarray) -> None:

@@ -102,7 +102,6 @@ def save_model_atomic(model: Any, path: Path) -> None:
         model.save(tmp)
 
 
-
 def remove_stale_temporaries(out: Path) -> None:
     """Temporary files a killed process left behind; a live process's temporaries (a concurrent run) stay."""
     for sub in ("cells", "models", "errors"):

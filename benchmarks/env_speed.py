@@ -72,7 +72,9 @@ def main() -> None:
         "random": (kinds, params),
         "holding": (np.full(ACTIONS, skills.KICK_POSITION), np.tile(holding, (ACTIONS, 1))),
     }
-    print(f"profile {args.profile}; best of 3 runs per figure; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    print(
+        f"profile {args.profile}; best of 3 runs per figure; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores"
+    )
     for name, (stream_kinds, stream_params) in streams.items():
         print(f"\n== {name} actions ==")
         measure(name, args.profile, stream_kinds, stream_params, args.seconds)
@@ -80,7 +82,7 @@ def main() -> None:
 
 def measure(name: str, profile: str, kinds: np.ndarray, params: np.ndarray, seconds: float) -> None:
     """Print single-env, DummyVecEnv and batched figures for one action stream."""
-    tuples = [as_tuple(k, p) for k, p in zip(kinds, params)]
+    tuples = [as_tuple(k, p) for k, p in zip(kinds, params, strict=True)]
     env = DribbleEnv(profile=profile)
     env.reset(seed=0)
     counts = {"steps": 0, "episodes": 0}
@@ -113,8 +115,9 @@ def measure(name: str, profile: str, kinds: np.ndarray, params: np.ndarray, seco
         vec = DribbleVecEnv(n, profile=profile)
         vec.seed(0)
         vec.reset()
-        batches = [(np.resize(np.roll(kinds, -j), n), np.resize(np.roll(params, -j, axis=0), (n, skills.N_PARAMS)))
-                   for j in range(8)]
+        batches = [
+            (np.resize(np.roll(kinds, -j), n), np.resize(np.roll(params, -j, axis=0), (n, skills.N_PARAMS))) for j in range(8)
+        ]
 
         def arrays(k: int, vec=vec, batches=batches, n=n) -> int:
             for i in range(k):
@@ -132,12 +135,16 @@ def measure(name: str, profile: str, kinds: np.ndarray, params: np.ndarray, seco
                 return k * n
 
             rate = best_rate(via_tuples, seconds)
-            print(f"DribbleVecEnv({n:>4}).step (tuples):  {rate:>12,.0f} player-steps/s  ({rate / dummy_rate:6.1f}x DummyVecEnv, "
-                  f"step_arrays is {array_rates[64] / rate:.2f}x faster; target <= 3x)")
+            print(
+                f"DribbleVecEnv({n:>4}).step (tuples):  {rate:>12,.0f} player-steps/s  "
+                f"({rate / dummy_rate:6.1f}x DummyVecEnv, "
+                f"step_arrays is {array_rates[64] / rate:.2f}x faster; target <= 3x)"
+            )
     target = TARGETS.get(name)
     if target:
         verdict = "met" if array_rates[4096] >= target else "NOT met"
         print(f"target DribbleVecEnv(4096).step_arrays >= {target:,.0f} player-steps/s: {verdict}")
+
 
 if __name__ == "__main__":
     main()

@@ -60,7 +60,13 @@ def algo_config(cell: Cell) -> dict[str, Any]:
     """The hyperparameters a cell ran with, as recorded in its file."""
     if cell.algo == "SarsaAAC":
         _, policy, policy_kwargs = SARSA_CONFIGS[cell.config]
-        return {"policy": policy, "policy_kwargs": policy_kwargs, "n_envs": SARSA_N_ENVS, "other": "SarsaAAC defaults", **cell.overrides}
+        return {
+            "policy": policy,
+            "policy_kwargs": policy_kwargs,
+            "n_envs": SARSA_N_ENVS,
+            "other": "SarsaAAC defaults",
+            **cell.overrides,
+        }
     if cell.algo == "Reference":
         return {}
     spec = BASELINES[cell.algo]

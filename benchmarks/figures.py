@@ -35,7 +35,11 @@ FAMILY_TITLES = {
     "RBF": "SarsaAAC with arrays of Gaussian RBFs (linear approximators)",
 }
 
-RELIABILITY_STYLE = {"sarsa_aac": ("#d94801", "best SarsaAAC"), "baseline": ("#6a51a3", "best baseline"), "handcoded": ("black", "hand-coded")}
+RELIABILITY_STYLE = {
+    "sarsa_aac": ("#d94801", "best SarsaAAC"),
+    "baseline": ("#6a51a3", "best baseline"),
+    "handcoded": ("black", "hand-coded"),
+}
 
 
 def color_of(group: Group) -> str:
@@ -43,8 +47,10 @@ def color_of(group: Group) -> str:
 
 
 def env_short(env_id: str) -> str:
-    return {"RoboCupDribblePaper-v0": "RoboCupDribblePaper-v0 (v11 physics)", "RoboCupDribble-v0": "RoboCupDribble-v0 (v19 physics)"}.get(env_id, env_id)
-
+    return {
+        "RoboCupDribblePaper-v0": "RoboCupDribblePaper-v0 (v11 physics)",
+        "RoboCupDribble-v0": "RoboCupDribble-v0 (v19 physics)",
+    }.get(env_id, env_id)
 
 
 def _plt():
@@ -147,13 +153,21 @@ def best_figure(out: Path, groups: dict[str, list[Group]], references: dict[str,
             _references(ax, references.get(env_id))
             _axes_style(ax, xlabel, _ymax(references, [env_id], chosen))
             ax.set_title(f"{env_short(env_id)}: vs {xlabel.split(' ', 1)[1]}", fontsize=10.5)
-        axes[row, 1].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False, title=budget_note(chosen).replace("; ", "\n"), title_fontsize=8.5)
-    fig.suptitle("Best SarsaAAC config of each family and the SB3 baselines (cf. paper Fig. 8)\nIQM over seeds with 95% bootstrap CI", fontsize=12)
+        axes[row, 1].legend(
+            loc="center left",
+            bbox_to_anchor=(1.01, 0.5),
+            frameon=False,
+            title=budget_note(chosen).replace("; ", "\n"),
+            title_fontsize=8.5,
+        )
+    fig.suptitle(
+        "Best SarsaAAC config of each family and the SB3 baselines (cf. paper Fig. 8)\nIQM over seeds with 95% bootstrap CI",
+        fontsize=12,
+    )
     fig.tight_layout()
     fig.savefig(out / "fig_best.png", bbox_inches="tight")
     plt.close(fig)
     return "fig_best.png"
-
 
 
 def _entry_label(name: str, entry: dict[str, Any]) -> str:
@@ -184,7 +198,9 @@ def reliability_figure(out: Path, reliability: dict[str, Any]) -> str | None:
         ax_h.set_xlim(0, last)
         ax_h.set_xlabel("metres dribbled before losing the ball (or in 35 actions)")
         ax_h.set_ylabel("share of players (%)")
-        ax_h.set_title(f"{env_short(env_id)}: histogram, {next(iter(entries.values()))['players']:,} fresh players", fontsize=10)
+        ax_h.set_title(
+            f"{env_short(env_id)}: histogram, {next(iter(entries.values()))['players']:,} fresh players", fontsize=10
+        )
         ax_h.legend(loc="upper right", frameon=False)
         ax_c.set_xlim(0, last)
         ax_c.set_ylim(0, 102)
@@ -193,7 +209,9 @@ def reliability_figure(out: Path, reliability: dict[str, Any]) -> str | None:
         ax_c.set_ylabel("players dribbling at least m metres (%)")
         ax_c.set_title(f"{env_short(env_id)}: share reaching each metre", fontsize=10)
         ax_c.legend(loc="lower left", frameon=False)
-    fig.suptitle("Reliability test (cf. paper Figs. 9-10): every player a fresh heterogeneous type, one greedy episode", fontsize=12)
+    fig.suptitle(
+        "Reliability test (cf. paper Figs. 9-10): every player a fresh heterogeneous type, one greedy episode", fontsize=12
+    )
     fig.tight_layout()
     fig.savefig(out / "fig_reliability.png", bbox_inches="tight")
     plt.close(fig)
@@ -206,7 +224,12 @@ def final_figure(out: Path, groups: dict[str, list[Group]], references: dict[str
     env_ids = [e for e, gs in groups.items() if gs]
     if not env_ids:
         return None
-    fig, axes = plt.subplots(1, len(env_ids), figsize=(max(8.5, 6.8 * len(env_ids)), 0.42 * max(len(groups[e]) for e in env_ids) + 2.4), squeeze=False)
+    fig, axes = plt.subplots(
+        1,
+        len(env_ids),
+        figsize=(max(8.5, 6.8 * len(env_ids)), 0.42 * max(len(groups[e]) for e in env_ids) + 2.4),
+        squeeze=False,
+    )
     for ax, env_id in zip(axes[0], env_ids, strict=True):
         gs = groups[env_id][::-1]
         for y, g in enumerate(gs):

@@ -70,7 +70,6 @@ def group_results(results: list[dict[str, Any]]) -> tuple[dict[str, list[Group]]
     return {e: groups.get(e, []) for e in env_order}, references
 
 
-
 def iqm_ci(values: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """IQM over runs (axis 0) and its 95% percentile bootstrap interval; the interval is the point itself for 1 run
     or runs that all agree."""

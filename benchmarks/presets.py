@@ -77,9 +77,10 @@ BASELINES: dict[str, dict[str, Any]] = {
     # A2C: SB3 defaults (n_steps=5, i.e. 40 transitions per update with 8 envs).
     "A2C": {"wrapper": "flatten", "n_envs": 8, "kwargs": {}},
     # Off-policy: SB3's defaults take one gradient step per env step with one env, ~250-500 env steps/s on this
-    # machine (5-10 min per 150k-step cell, 30 such cells), too slow for the time box at SarsaAAC's step budget. With 16 envs and train_freq=1 they take one
-    # gradient step per 16 transitions (a replay ratio of 1/16 instead of 1). That is a handicap in sample
-    # efficiency we state in the report; it keeps the number of env steps equal to SarsaAAC's.
+    # machine (5-10 min per 150k-step cell, 30 such cells), too slow for the time box at SarsaAAC's step budget.
+    # With 16 envs and train_freq=1 they take one gradient step per 16 transitions (a replay ratio of 1/16 instead
+    # of 1). That is a handicap in sample efficiency we state in the report; it keeps the number of env steps equal
+    # to SarsaAAC's.
     "SAC": {
         "wrapper": "flatten",
         "n_envs": 16,
@@ -206,7 +207,10 @@ def build_cells(preset: str | dict[str, Any]) -> list[Cell]:
     """All cells of a preset (a name of :data:`PRESETS` or a dict of the same shape), references first."""
     p = PRESETS[preset] if isinstance(preset, str) else preset
     common = {"eval_every": p["eval_every"], "eval_episodes": p["eval_episodes"], "final_episodes": p["final_episodes"]}
-    cells = [Cell(env_id, "Reference", "references", final_episodes=p["final_episodes"], eval_episodes=p["eval_episodes"]) for env_id in p["env_ids"]]
+    cells = [
+        Cell(env_id, "Reference", "references", final_episodes=p["final_episodes"], eval_episodes=p["eval_episodes"])
+        for env_id in p["env_ids"]
+    ]
     for env_id in p["env_ids"]:
         for config in p["sarsa_configs"]:
             cells += [Cell(env_id, "SarsaAAC", config, seed, p["sarsa_budget"], **common) for seed in p["seeds"]]

@@ -96,14 +96,22 @@ def run_reliability(out: str | Path, n_players: int = RELIABILITY_PLAYERS, progr
     for env_id in env_ids:
         profile = ENV_PROFILES[env_id]
         entries = {}
-        picks = {"sarsa_aac": best_cell(results, env_id, ("SarsaAAC",)), "baseline": best_cell(results, env_id, tuple(BASELINES))}
+        picks = {
+            "sarsa_aac": best_cell(results, env_id, ("SarsaAAC",)),
+            "baseline": best_cell(results, env_id, tuple(BASELINES)),
+        }
         for name, pick in picks.items():
             if pick is None:
                 continue
             model_path = out / pick["model"]
             source = {"cell_id": pick["cell_id"], "model_mtime": os.path.getmtime(model_path)}
             old = cache.get("envs", {}).get(env_id, {}).get(name)
-            if old and old["cell_id"] == source["cell_id"] and old["model_mtime"] == source["model_mtime"] and old["players"] == n_players:
+            if (
+                old
+                and old["cell_id"] == source["cell_id"]
+                and old["model_mtime"] == source["model_mtime"]
+                and old["players"] == n_players
+            ):
                 entries[name] = old
                 continue
             if progress:
@@ -115,7 +123,9 @@ def run_reliability(out: str | Path, n_players: int = RELIABILITY_PLAYERS, progr
         else:
             if progress:
                 print(f"reliability test ({n_players} players) of the hand-coded dribbler on {env_id} ...", flush=True)
-            entries["handcoded"] = reliability_entry(HandCodedDribbler(profile=profile), profile, n_players, {"cell_id": "hand-coded"})
+            entries["handcoded"] = reliability_entry(
+                HandCodedDribbler(profile=profile), profile, n_players, {"cell_id": "hand-coded"}
+            )
         data["envs"][env_id] = entries
     atomic_write_json(cache_path, data)
     return data

@@ -71,7 +71,9 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         final = final_figure(out, groups, references)
         rel_fig = reliability_figure(out, reliability) if reliability else None
     else:
-        family_figs = {f: FAMILY_FIGURES[f][0] if any(g.family == f for gs in groups.values() for g in gs) else None for f in FAMILIES}
+        family_figs = {
+            f: FAMILY_FIGURES[f][0] if any(g.family == f for gs in groups.values() for g in gs) else None for f in FAMILIES
+        }
         best = "fig_best.png" if any(groups.values()) else None
         final = "fig_final.png" if best else None
         rel_fig = "fig_reliability.png" if reliability else None
@@ -99,7 +101,14 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
     lines += ["## Results per env (Table 1 of the paper, extended)", ""]
     for env_id, gs in groups.items():
         ref = references.get(env_id)
-        lines += [f"### {env_title(env_id)}", "", "Greedy performance at the end of training:", "", performance_table(gs, ref), ""]
+        lines += [
+            f"### {env_title(env_id)}",
+            "",
+            "Greedy performance at the end of training:",
+            "",
+            performance_table(gs, ref),
+            "",
+        ]
         lines += ["Learning speed and cost:", "", cost_table(gs, ref), ""]
     missing = [e for e in references if e not in groups]
     for env_id in missing:
@@ -107,16 +116,30 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
     lines += ["## Figures", ""]
     for family in FAMILIES:
         if family_figs[family]:
-            lines += [f"### {FAMILY_TITLES[family]} (paper {FAMILY_FIGURES[family][1]})", "", f"![{family}]({family_figs[family]})", ""]
+            lines += [
+                f"### {FAMILY_TITLES[family]} (paper {FAMILY_FIGURES[family][1]})",
+                "",
+                f"![{family}]({family_figs[family]})",
+                "",
+            ]
     if best:
-        lines += ["### Best of each family and the baselines (paper Fig. 8)", "", "Left: against training episodes (the paper's axis); right: against env steps (the budget all algorithms share).", "", f"![best]({best})", ""]
+        lines += [
+            "### Best of each family and the baselines (paper Fig. 8)",
+            "",
+            "Left: against training episodes (the paper's axis); right: against env steps (the budget all algorithms share).",
+            "",
+            f"![best]({best})",
+            "",
+        ]
     if final:
         lines += ["### Final distance of every config", "", f"![final]({final})", ""]
     lines += ["## Reliability test (paper Figs. 9-10)", ""]
     if reliability:
         lines += [
-            f"10,000 fresh players (a new player-type set for every episode, seed {reliability['seed']}), one episode each, greedy. "
-            "The policies are the best SarsaAAC cell and the best baseline cell of each env (best config by IQM final distance, "
+            f"10,000 fresh players (a new player-type set for every episode, seed {reliability['seed']}), "
+            "one episode each, greedy. "
+            "The policies are the best SarsaAAC cell and the best baseline cell of each env "
+            "(best config by IQM final distance, "
             "then its best seed, both chosen on the final evaluation set, not on these players), and the hand-coded dribbler.",
             "",
             reliability_table(reliability),

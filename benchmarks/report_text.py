@@ -40,7 +40,10 @@ def fmt_reach(group: Group, metres: float, key: str) -> str:
 
 
 def env_title(env_id: str) -> str:
-    return {"RoboCupDribblePaper-v0": "RoboCupDribblePaper-v0 (rcssserver 11 physics, the paper's)", "RoboCupDribble-v0": "RoboCupDribble-v0 (rcssserver 19 physics)"}.get(env_id, env_id)
+    return {
+        "RoboCupDribblePaper-v0": "RoboCupDribblePaper-v0 (rcssserver 11 physics, the paper's)",
+        "RoboCupDribble-v0": "RoboCupDribble-v0 (rcssserver 19 physics)",
+    }.get(env_id, env_id)
 
 
 def md_table(header: list[str], rows: list[list[str]], align: str | None = None) -> str:
@@ -51,10 +54,20 @@ def md_table(header: list[str], rows: list[list[str]], align: str | None = None)
     return "\n".join(lines)
 
 
-
 def performance_table(groups: list[Group], reference: dict[str, Any] | None) -> str:
     ceiling = reference["references"]["ceiling"]["mean"] if reference else None
-    header = ["config", "seeds", "env steps", "episodes", "final distance (m), IQM [95% CI]", "% of ceiling", "best curve point (m)", "max episode (m)", ">= 20 m", "ball lost"]
+    header = [
+        "config",
+        "seeds",
+        "env steps",
+        "episodes",
+        "final distance (m), IQM [95% CI]",
+        "% of ceiling",
+        "best curve point (m)",
+        "max episode (m)",
+        ">= 20 m",
+        "ball lost",
+    ]
     rows = []
     for g in groups:
         finals = g.final()
@@ -76,16 +89,51 @@ def performance_table(groups: list[Group], reference: dict[str, Any] | None) -> 
         )
     if reference:
         hand = reference["references"]["handcoded"]["final"]
-        rows.append(["*hand-coded dribbler*", "-", "-", "-", f"{hand['distance_mean']:.1f}", f"{100 * hand['distance_mean'] / ceiling:.0f}%", "-", f"{hand['distance_max']:.1f}", f"{100 * hand['reach20_share']:.0f}%", f"{100 * hand['ball_loss_rate']:.0f}%"])
+        rows.append(
+            [
+                "*hand-coded dribbler*",
+                "-",
+                "-",
+                "-",
+                f"{hand['distance_mean']:.1f}",
+                f"{100 * hand['distance_mean'] / ceiling:.0f}%",
+                "-",
+                f"{hand['distance_max']:.1f}",
+                f"{100 * hand['reach20_share']:.0f}%",
+                f"{100 * hand['ball_loss_rate']:.0f}%",
+            ]
+        )
         c = reference["references"]["ceiling"]
-        rows.append(["*running ceiling (no ball)*", "-", "-", "-", f"{c['mean']:.1f} (min {c['min']:.1f}, max {c['max']:.1f})", "100%", "-", f"{c['max']:.1f}", "-", "-"])
+        rows.append(
+            [
+                "*running ceiling (no ball)*",
+                "-",
+                "-",
+                "-",
+                f"{c['mean']:.1f} (min {c['min']:.1f}, max {c['max']:.1f})",
+                "100%",
+                "-",
+                f"{c['max']:.1f}",
+                "-",
+                "-",
+            ]
+        )
     return md_table(header, rows)
 
 
 def cost_table(groups: list[Group], reference: dict[str, Any] | None) -> str:
     dqn = [g for g in groups if g.algo == "DQN"]
     dqn_us = float(np.median(dqn[0].values("predict_us"))) if dqn else None
-    header = ["config", "episodes to 20 m", "train time to 20 m", "episodes to 25 m", "train time to 25 m", "decision cost (us/action)", "vs DQN", "train wall time per seed (s)"]
+    header = [
+        "config",
+        "episodes to 20 m",
+        "train time to 20 m",
+        "episodes to 25 m",
+        "train time to 25 m",
+        "decision cost (us/action)",
+        "vs DQN",
+        "train wall time per seed (s)",
+    ]
     rows = []
     for g in groups:
         us = float(np.median(g.values("predict_us")))
@@ -103,7 +151,9 @@ def cost_table(groups: list[Group], reference: dict[str, Any] | None) -> str:
         )
     if reference:
         us = reference["references"]["handcoded"]["predict_us"]
-        rows.append(["*hand-coded dribbler*", "-", "-", "-", "-", f"{us:.0f}", f"{us / dqn_us:.2f}x" if dqn_us else "n/a", "-"])
+        rows.append(
+            ["*hand-coded dribbler*", "-", "-", "-", "-", f"{us:.0f}", f"{us / dqn_us:.2f}x" if dqn_us else "n/a", "-"]
+        )
     return md_table(header, rows)
 
 
@@ -111,7 +161,12 @@ def _at_episodes(group: Group, episodes: float) -> str:
     """IQM of the greedy distance at ``episodes`` training episodes, if every run got that far."""
     if min(r["curve"][-1]["episodes"] for r in group.runs) < episodes:
         return f"a seed trained fewer than {fmt_int(episodes)} episodes"
-    values = np.array([np.interp(episodes, [p["episodes"] for p in r["curve"]], [p["distance_mean"] for p in r["curve"]]) for r in group.runs])
+    values = np.array(
+        [
+            np.interp(episodes, [p["episodes"] for p in r["curve"]], [p["distance_mean"] for p in r["curve"]])
+            for r in group.runs
+        ]
+    )
     return f"{float(iqm(values)):.1f} m at {fmt_int(episodes)} episodes"
 
 
@@ -128,14 +183,20 @@ def _reach_claim(group: Group | None, metres: float, within: float | None) -> tu
     if within is None:
         scores = group.final()
     else:
-        scores = np.array([np.interp(within, [p["episodes"] for p in r["curve"]], [p["distance_mean"] for p in r["curve"]]) for r in group.runs])
+        scores = np.array(
+            [
+                np.interp(within, [p["episodes"] for p in r["curve"]], [p["distance_mean"] for p in r["curve"]])
+                for r in group.runs
+            ]
+        )
     check = target_verdict(scores, metres)
     where = "at the end of training" if within is None else f"at {fmt_int(within)} episodes"
     if within is not None and min(r["curve"][-1]["episodes"] for r in group.runs) < within:
         where += " (a run that stopped earlier: its last point)"
     test = f"mean {check.mean:.1f} m {where}, one-sided 95% lower bound {check.bound:.1f} m"
     if not reached:
-        text = f"{group.label}: {metres:g} m not reached in {fmt_int(np.mean(group.values('episodes')))} episodes (final {final} m)"
+        episodes = fmt_int(np.mean(group.values("episodes")))
+        text = f"{group.label}: {metres:g} m not reached in {episodes} episodes (final {final} m)"
     else:
         mean_ep = np.mean([p["episodes"] for p in reached])
         text = f"{group.label}: {metres:g} m after {fmt_int(mean_ep)} episodes ({len(reached)}/{n} seeds; final {final} m)"
@@ -169,7 +230,10 @@ def paper_claims(groups: dict[str, list[Group]], reliability: dict[str, Any] | N
             best_points = [np.array([max(p["distance_mean"] for p in r["curve"]) for r in g.runs]) for g in bigger]
             reach = [target_verdict(b, 12.0, "at least").outcome for b in best_points]
             beyond = [target_verdict(b, 12.0, "at most").outcome == "not met" for b in best_points]
-            text = "; ".join(f"{g.label}: best curve point {np.mean(b):.1f} m (mean over seeds)" for g, b in zip(bigger, best_points, strict=True))
+            text = "; ".join(
+                f"{g.label}: best curve point {np.mean(b):.1f} m (mean over seeds)"
+                for g, b in zip(bigger, best_points, strict=True)
+            )
             if "too few seeds" in reach:
                 verdict = _target_text("too few seeds")
             elif any(beyond):
@@ -196,9 +260,23 @@ def paper_claims(groups: dict[str, list[Group]], reliability: dict[str, Any] | N
         entry = (reliability or {}).get("envs", {}).get(env_id, {}).get("sarsa_aac")
         if entry:
             share = entry["share_at_least"]["18"]
-            rows.append([short, "Reliability test: most players run at least 18 m (Fig. 9)", f"{100 * share:.1f}% of {entry['players']:,} players >= 18 m ({entry['cell_id']})", "yes" if share > 0.5 else "no"])
+            rows.append(
+                [
+                    short,
+                    "Reliability test: most players run at least 18 m (Fig. 9)",
+                    f"{100 * share:.1f}% of {entry['players']:,} players >= 18 m ({entry['cell_id']})",
+                    "yes" if share > 0.5 else "no",
+                ]
+            )
         else:
-            rows.append([short, "Reliability test: most players run at least 18 m (Fig. 9)", "not run (python -m benchmarks.run --reliability)", "-"])
+            rows.append(
+                [
+                    short,
+                    "Reliability test: most players run at least 18 m (Fig. 9)",
+                    "not run (python -m benchmarks.run --reliability)",
+                    "-",
+                ]
+            )
     return md_table(["env", "paper's claim", "ours", "met?"], rows, "llll")
 
 
@@ -225,19 +303,25 @@ def baseline_verdicts(groups: dict[str, list[Group]]) -> list[str]:
         }[c.outcome]
         verdict += (
             f" (Welch's t-test on the difference p = {c.welch_p:.3g}, n = {c.n_a} vs {c.n_b}; SarsaAAC - baseline: means "
-            f"{c.mean_difference:+.1f} m {_interval(c.mean_difference_ci)}, IQMs {c.iqm_difference:+.1f} m {_interval(c.iqm_difference_ci)}; "
+            f"{c.mean_difference:+.1f} m {_interval(c.mean_difference_ci)}, "
+            f"IQMs {c.iqm_difference:+.1f} m {_interval(c.iqm_difference_ci)}; "
             f"P(SarsaAAC > baseline) = {c.probability_of_improvement:.2f} {_interval(c.probability_of_improvement_ci, 2)})"
         )
         beaten = [g.label for g in gs if g.algo != "SarsaAAC" and float(iqm(g.final())) > s]
         lines.append(
             f"- {env_id}: best SarsaAAC {sarsa.label} {s:.1f} m [{s_low:.1f}, {s_high:.1f}] vs best baseline {base.label} "
             f"{b:.1f} m [{b_low:.1f}, {b_high:.1f}]: {verdict}."
-            + (f" Baselines with a higher IQM than the best SarsaAAC config (not tested): {', '.join(beaten)}." if beaten else "")
+            + (
+                f" Baselines with a higher IQM than the best SarsaAAC config (not tested): {', '.join(beaten)}."
+                if beaten
+                else ""
+            )
         )
         # Equal env steps are not equal compute: say which is faster per step too.
         lines.append(
             f"  Training wall time per seed: SarsaAAC {sarsa.label} {np.mean(sarsa.values('train_wall_s')):.0f} s, "
-            f"{base.label} {np.mean(base.values('train_wall_s')):.0f} s (same env-step budget, {sarsa.budget:,} vs {base.budget:,})."
+            f"{base.label} {np.mean(base.values('train_wall_s')):.0f} s "
+            f"(same env-step budget, {sarsa.budget:,} vs {base.budget:,})."
         )
     return lines
 
@@ -258,7 +342,23 @@ def reliability_table(reliability: dict[str, Any]) -> str:
                     f"{100 * e['ball_loss_rate']:.1f}%",
                 ]
             )
-    return md_table(["env", "policy", "players", "mean (m)", "median (m)", ">= 8 m", ">= 16 m", ">= 18 m", ">= 20 m", ">= 25 m", "ball lost"], rows, "llrrrrrrrrr")
+    return md_table(
+        [
+            "env",
+            "policy",
+            "players",
+            "mean (m)",
+            "median (m)",
+            ">= 8 m",
+            ">= 16 m",
+            ">= 18 m",
+            ">= 20 m",
+            ">= 25 m",
+            "ball lost",
+        ],
+        rows,
+        "llrrrrrrrrr",
+    )
 
 
 def _unique(results: list[dict[str, Any]], key: str) -> list[Any]:
@@ -276,7 +376,9 @@ def _invocation_text(entry: dict[str, Any]) -> str:
     return f"{entry['status']}: {wall} with {entry['workers']} workers{cells}"
 
 
-def setup_section(out: Path, results: list[dict[str, Any]], groups: dict[str, list[Group]], reliability: dict[str, Any] | None) -> list[str]:
+def setup_section(
+    out: Path, results: list[dict[str, Any]], groups: dict[str, list[Group]], reliability: dict[str, Any] | None
+) -> list[str]:
     lines = ["## How this was made", ""]
     commands = _unique(results, "command")
     lines += ["Commands (from the repository root, with `PYTHONPATH=.:envs`):", "", "```bash"]
@@ -299,7 +401,10 @@ def setup_section(out: Path, results: list[dict[str, Any]], groups: dict[str, li
         )
     lines.append("")
     for m in _unique(results, "machine"):
-        lines.append(f"- Machine: {m['cpu']}, {m['cores']} cores, {m['platform']}; torch threads per worker {m['torch_threads']}, BLAS threads 1.")
+        lines.append(
+            f"- Machine: {m['cpu']}, {m['cores']} cores, {m['platform']}; "
+            f"torch threads per worker {m['torch_threads']}, BLAS threads 1."
+        )
     for v in _unique(results, "versions"):
         lines.append("- Versions: " + ", ".join(f"{k} {val}" for k, val in v.items()))
     lines.append("")
@@ -318,13 +423,17 @@ def method_section(results: list[dict[str, Any]]) -> list[str]:
     lines = ["## Method", ""]
     if cell:
         lines.append(
-            f"- **Learning curves**: every {cell['eval_every']:,} training episodes, {cell['eval_episodes']} greedy episodes on a fixed evaluation set "
-            f"(`evaluate_dribbling(..., seed={results[0].get('eval_seed', 10000)})`: the same players, starts and noise for every cell); a point before "
+            f"- **Learning curves**: every {cell['eval_every']:,} training episodes, "
+            f"{cell['eval_episodes']} greedy episodes on a fixed evaluation set "
+            f"(`evaluate_dribbling(..., seed={results[0].get('eval_seed', 10000)})`: "
+            "the same players, starts and noise for every cell); a point before "
             "training and one where training ended. x = training episodes (or env steps) of the run; y = mean metres dribbled."
         )
         lines.append(
-            f"- **Final evaluation**: {cell['final_episodes']:,} greedy episodes on another fixed set (seed {results[0].get('final_seed', 20000)}). "
-            "'>= 20 m' is the share of those episodes that dribbled at least 20 m; 'ball lost' the share that ended by losing the ball "
+            f"- **Final evaluation**: {cell['final_episodes']:,} greedy episodes on another fixed set "
+            f"(seed {results[0].get('final_seed', 20000)}). "
+            "'>= 20 m' is the share of those episodes that dribbled at least 20 m; "
+            "'ball lost' the share that ended by losing the ball "
             "(the rest kept it for all 35 actions)."
         )
     lines += [
@@ -334,7 +443,8 @@ def method_section(results: list[dict[str, Any]]) -> list[str]:
         f"mean final distances (two-sided, 5%), with bootstrap CIs of the differences of means and IQMs and the probability "
         f"of improvement beside it, never from overlapping CIs; a paper's figure is 'met' only when a one-sided t-test "
         f"shows our mean past it (5%). Fewer than {MIN_SEEDS} seeds on a side: no verdict.",
-        "- **Episodes / time to 20 m and 25 m**: per seed, the first curve point whose greedy mean reaches the mark (training episodes, "
+        "- **Episodes / time to 20 m and 25 m**: per seed, the first curve point whose greedy mean reaches the mark "
+        "(training episodes, "
         "and training seconds excluding the evaluations); mean over the seeds that reached it.",
         "- **Decision cost**: median wall time of one `predict(obs, deterministic=True)` on a single observation "
         "(300 observations), including for baselines the conversion to the env's Tuple action. The paper's cost model "
@@ -354,12 +464,18 @@ def method_section(results: list[dict[str, Any]]) -> list[str]:
         if algo in BASELINES and algo not in seen:
             seen.add(algo)
             cfg = r["algo_config"]
-            lines.append(f"  - {algo}: n_envs={cfg['n_envs']}, {cfg['wrapper']}" + (f" (bins={cfg['bins']})" if "bins" in cfg else "") + f", {json.dumps(cfg['kwargs'])}" + (f", Gaussian action noise sigma={cfg['action_noise_sigma']}" if "action_noise_sigma" in cfg else ""))
+            lines.append(
+                f"  - {algo}: n_envs={cfg['n_envs']}, {cfg['wrapper']}"
+                + (f" (bins={cfg['bins']})" if "bins" in cfg else "")
+                + f", {json.dumps(cfg['kwargs'])}"
+                + (f", Gaussian action noise sigma={cfg['action_noise_sigma']}" if "action_noise_sigma" in cfg else "")
+            )
     lines += [
         "  The off-policy baselines take one gradient step per 16 (SAC, TD3, DDPG) or 8 (DQN) transitions, far fewer "
         "than their defaults (one per transition), to fit the time box at SarsaAAC's step budget. That handicaps their sample "
         "efficiency; it is the price of equal env steps within the time box.",
-        "- **SarsaAAC** runs with its defaults on `DribbleVecEnv(16)`; only the policy and its `hidden_units` / `n_rbf` change.",
+        "- **SarsaAAC** runs with its defaults on `DribbleVecEnv(16)`; "
+        "only the policy and its `hidden_units` / `n_rbf` change.",
         "",
     ]
     return lines

@@ -43,7 +43,15 @@ from typing import Any
 from benchmarks import cells
 from benchmarks.engines import RayEngine
 from benchmarks.presets import PRESETS, build_cells, select
-from benchmarks.provenance import ENV_VAR, REPO, DirtyTreeError, invocation_provenance, logged_invocation, new_invocation_id, require_clean_tree
+from benchmarks.provenance import (
+    ENV_VAR,
+    REPO,
+    DirtyTreeError,
+    invocation_provenance,
+    logged_invocation,
+    new_invocation_id,
+    require_clean_tree,
+)
 from benchmarks.reliability import RELIABILITY_PLAYERS, run_reliability
 
 
@@ -56,13 +64,23 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--preset", choices=sorted(PRESETS), help="the grid to run")
     parser.add_argument("--out", default=None, help="results directory (default: runs/bench-<preset>)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (1: run in this process)")
-    parser.add_argument("--only", default=None, help="comma-separated glob patterns of cell ids (a plain word matches as a substring)")
+    parser.add_argument(
+        "--only", default=None, help="comma-separated glob patterns of cell ids (a plain word matches as a substring)"
+    )
     parser.add_argument("--list", action="store_true", help="list the cells (and whether they are finished), run nothing")
     parser.add_argument("--reliability", action="store_true", help="run the reliability test of the best policies in --out")
     parser.add_argument("--players", type=int, default=RELIABILITY_PLAYERS, help="players of the reliability test")
-    parser.add_argument("--engine", choices=("local", "ray"), default="local", help="local process pool, or one Ray task per cell")
-    parser.add_argument("--address", default=None, help="the Ray cluster to join (default: start Ray here with --workers CPUs)")
-    parser.add_argument("--allow-dirty", action="store_true", help="run although tracked files have uncommitted changes (recorded in each cell)")
+    parser.add_argument(
+        "--engine", choices=("local", "ray"), default="local", help="local process pool, or one Ray task per cell"
+    )
+    parser.add_argument(
+        "--address", default=None, help="the Ray cluster to join (default: start Ray here with --workers CPUs)"
+    )
+    parser.add_argument(
+        "--allow-dirty",
+        action="store_true",
+        help="run although tracked files have uncommitted changes (recorded in each cell)",
+    )
     args = parser.parse_args(argv)
     signal.signal(signal.SIGTERM, _exit_on_sigterm)  # `kill` runs the cleanup of run_grid (workers end with us)
     if not args.preset and not args.reliability:
@@ -70,7 +88,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.address and args.engine != "ray":
         parser.error("--address needs --engine ray")
     out = Path(args.out or f"runs/bench-{args.preset or 'full'}")
-    os.environ["SB3_AAC_BENCH_COMMAND"] = "python -m benchmarks.run " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
+    os.environ["SB3_AAC_BENCH_COMMAND"] = "python -m benchmarks.run " + " ".join(
+        shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv)
+    )
     if args.preset:
         grid = select(build_cells(args.preset), args.only)
         if args.list:
@@ -79,7 +99,12 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         start = time.time()
         invocation = new_invocation_id()
-        fields = {"command": os.environ["SB3_AAC_BENCH_COMMAND"], "workers": args.workers, "engine": args.engine, "allow_dirty": args.allow_dirty}
+        fields = {
+            "command": os.environ["SB3_AAC_BENCH_COMMAND"],
+            "workers": args.workers,
+            "engine": args.engine,
+            "allow_dirty": args.allow_dirty,
+        }
         try:
             with logged_invocation(out, invocation=invocation, **fields) as log:
                 state = require_clean_tree(REPO, args.allow_dirty, ignore=(out,))
@@ -93,7 +118,10 @@ def main(argv: list[str] | None = None) -> int:
         except DirtyTreeError as error:
             print(f"refused: {error}", file=sys.stderr)
             return 2
-        print(f"{len(status['done'])} cells done, {len(status['skipped'])} skipped, {len(status['failed'])} failed in {time.time() - start:.0f} s; results in {out}")
+        print(
+            f"{len(status['done'])} cells done, {len(status['skipped'])} skipped, {len(status['failed'])} failed "
+            f"in {time.time() - start:.0f} s; results in {out}"
+        )
         if status["failed"]:
             print("failed (tracebacks in errors/): " + ", ".join(status["failed"]))
         if status["busy"]:

@@ -30,7 +30,10 @@ class GolfEnv(gym.Env):
         self.observation_space = spaces.Box(0.0, 60.0, (1,), np.float32)
         # The canonical layout: a type, then one parameter Box per type.
         self.action_space = spaces.Tuple(
-            (spaces.Discrete(2), spaces.Tuple((spaces.Box(0.0, 1.0, (1,), np.float32), spaces.Box(0.0, 1.0, (1,), np.float32))))
+            (
+                spaces.Discrete(2),
+                spaces.Tuple((spaces.Box(0.0, 1.0, (1,), np.float32), spaces.Box(0.0, 1.0, (1,), np.float32))),
+            )
         )
         self.distance, self.shots = 0.0, 0
 

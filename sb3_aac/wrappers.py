@@ -199,9 +199,7 @@ def grid_to_action(index: np.ndarray, types: np.ndarray, params_scaled: np.ndarr
     return types[index], params_scaled[index]
 
 
-def action_to_grid(
-    k: np.ndarray, params_scaled: np.ndarray, dims: Sequence[int], bins: int | Sequence[int]
-) -> np.ndarray:
+def action_to_grid(k: np.ndarray, params_scaled: np.ndarray, dims: Sequence[int], bins: int | Sequence[int]) -> np.ndarray:
     """
     Inverse of :func:`grid_to_action`: the discrete action of type ``k`` nearest to ``params_scaled``.
 
@@ -309,8 +307,7 @@ class DiscretizeParameterizedAction(gym.ActionWrapper):
         n_actions = sum(self.type_sizes)
         if n_actions > max_actions:
             per_type = ", ".join(
-                f"type {k}: {' x '.join(str(b) for b in self.bins[spec.type_slice(k)]) or '1'}"
-                for k in range(spec.n_types)
+                f"type {k}: {' x '.join(str(b) for b in self.bins[spec.type_slice(k)]) or '1'}" for k in range(spec.n_types)
             )
             raise ValueError(
                 f"DiscretizeParameterizedAction would have {n_actions} discrete actions ({per_type}), more than "

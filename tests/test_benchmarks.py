@@ -238,20 +238,45 @@ def synthetic_cell(env_id: str, algo: str, config: str, seed: int, final: float,
     episodes = np.arange(0, 12_001, 500)
     distances = final * (1 - np.exp(-rate * episodes)) + 0.3 * seed
     curve = [
-        {"episodes": int(e), "env_steps": int(e * 14), "wall_s": e / 500, "train_s": e / 600, "distance_mean": float(d),
-         "distance_median": float(d), "distance_max": float(d + 5), "reach20_share": float(d > 20), "ball_loss_rate": 0.3}
+        {
+            "episodes": int(e),
+            "env_steps": int(e * 14),
+            "wall_s": e / 500,
+            "train_s": e / 600,
+            "distance_mean": float(d),
+            "distance_median": float(d),
+            "distance_max": float(d + 5),
+            "reach20_share": float(d > 20),
+            "ball_loss_rate": 0.3,
+        }
         for e, d in zip(episodes, distances, strict=True)
     ]
     cell = Cell(env_id, algo, config, seed, 168_000)
     return {
-        "cell_id": cell.cell_id, "cell": cell.to_dict(), "family": family, "command": "python -m benchmarks.run --preset full",
+        "cell_id": cell.cell_id,
+        "cell": cell.to_dict(),
+        "family": family,
+        "command": "python -m benchmarks.run --preset full",
         "algo_config": {"n_envs": 8, "wrapper": "flatten", "kwargs": {}} if algo != "SarsaAAC" else {},
-        "versions": {"python": "3.11"}, "machine": {"cpu": "test CPU", "cores": 2, "platform": "linux", "torch_threads": 1},
-        "started": "2026-01-01T00:00:00", "curve": curve,
-        "final": {"episodes": 1000, "distance_mean": float(distances[-1]), "distance_median": float(distances[-1]),
-                  "distance_max": float(distances[-1] + 6), "reach20_share": 0.5, "ball_loss_rate": 0.3},
-        "env_steps": 168_000, "episodes": 12_000, "train_wall_s": 20.0, "eval_wall_s": 2.0, "predict_us": 40.0 if algo == "SarsaAAC" else 300.0,
-        "wall_s": 22.0, "loadavg": {"start": 2.0, "end": 2.5},
+        "versions": {"python": "3.11"},
+        "machine": {"cpu": "test CPU", "cores": 2, "platform": "linux", "torch_threads": 1},
+        "started": "2026-01-01T00:00:00",
+        "curve": curve,
+        "final": {
+            "episodes": 1000,
+            "distance_mean": float(distances[-1]),
+            "distance_median": float(distances[-1]),
+            "distance_max": float(distances[-1] + 6),
+            "reach20_share": 0.5,
+            "ball_loss_rate": 0.3,
+        },
+        "env_steps": 168_000,
+        "episodes": 12_000,
+        "train_wall_s": 20.0,
+        "eval_wall_s": 2.0,
+        "predict_us": 40.0 if algo == "SarsaAAC" else 300.0,
+        "wall_s": 22.0,
+        "loadavg": {"start": 2.0, "end": 2.5},
     }
 
 
@@ -262,9 +287,21 @@ def test_report_from_synthetic_cells(tmp_path):
     results += [synthetic_cell(ENV_ID, "SarsaAAC", "mlp2", s, 15.0, "MLP") for s in range(3)]
     results += [synthetic_cell(ENV_ID, "DQN", "dqn", s, 26.0, "baseline") for s in range(10)]
     reference = {
-        "cell_id": "paper__reference", "cell": Cell(ENV_ID, "Reference", "references").to_dict(), "family": "reference",
+        "cell_id": "paper__reference",
+        "cell": Cell(ENV_ID, "Reference", "references").to_dict(),
+        "family": "reference",
         "references": {
-            "handcoded": {"final": {"episodes": 1000, "distance_mean": 13.0, "distance_median": 16.0, "distance_max": 27.0, "reach20_share": 0.1, "ball_loss_rate": 0.5}, "predict_us": 900.0},
+            "handcoded": {
+                "final": {
+                    "episodes": 1000,
+                    "distance_mean": 13.0,
+                    "distance_median": 16.0,
+                    "distance_max": 27.0,
+                    "reach20_share": 0.1,
+                    "ball_loss_rate": 0.5,
+                },
+                "predict_us": 900.0,
+            },
             "ceiling": {"players": 1000, "mean": 38.8, "median": 40.9, "min": 29.8, "max": 41.6, "cycles": 35},
         },
         "wall_s": 5.0,
@@ -273,16 +310,36 @@ def test_report_from_synthetic_cells(tmp_path):
         (cells_dir / f"{r['cell_id']}.json").write_text(json.dumps(r))
     counts = np.zeros(60, dtype=int)
     counts[[3, 15, 19, 22]] = [1000, 2000, 3000, 4000]
-    entry = {"cell_id": results[0]["cell_id"], "players": 10_000, "distance_mean": 17.0, "distance_median": 19.0, "distance_max": 23.0,
-             "share_at_least": {"8": 0.9, "16": 0.7, "18": 0.7, "20": 0.4, "25": 0.0}, "ball_loss_rate": 0.6,
-             "histogram": {"bin_metres": 1.0, "counts": counts.tolist()}}
-    (tmp_path / "reliability.json").write_text(json.dumps({"seed": 30_000, "envs": {ENV_ID: {"sarsa_aac": entry, "handcoded": {**entry, "cell_id": "hand-coded"}}}}))
+    entry = {
+        "cell_id": results[0]["cell_id"],
+        "players": 10_000,
+        "distance_mean": 17.0,
+        "distance_median": 19.0,
+        "distance_max": 23.0,
+        "share_at_least": {"8": 0.9, "16": 0.7, "18": 0.7, "20": 0.4, "25": 0.0},
+        "ball_loss_rate": 0.6,
+        "histogram": {"bin_metres": 1.0, "counts": counts.tolist()},
+    }
+    (tmp_path / "reliability.json").write_text(
+        json.dumps({"seed": 30_000, "envs": {ENV_ID: {"sarsa_aac": entry, "handcoded": {**entry, "cell_id": "hand-coded"}}}})
+    )
 
     text = build_report(tmp_path).read_text()
-    for needle in ("| config |", "final distance (m), IQM [95% CI]", "episodes to 20 m", "decision cost (us/action)",
-                   "hand-coded dribbler", "running ceiling", "paper's claim", "RBF arrays: 25 m in under 10,000 episodes",
-                   "most players run at least 18 m", "70.0% of 10,000 players", "python -m benchmarks.run --preset full",
-                   "test CPU", "168,000 env steps"):
+    for needle in (
+        "| config |",
+        "final distance (m), IQM [95% CI]",
+        "episodes to 20 m",
+        "decision cost (us/action)",
+        "hand-coded dribbler",
+        "running ceiling",
+        "paper's claim",
+        "RBF arrays: 25 m in under 10,000 episodes",
+        "most players run at least 18 m",
+        "70.0% of 10,000 players",
+        "python -m benchmarks.run --preset full",
+        "test CPU",
+        "168,000 env steps",
+    ):
         assert needle in text, needle
     # the baseline is better here, and the report must say so
     assert "the baseline DQN beats SarsaAAC" in text and "Welch's t-test on the difference" in text

@@ -43,7 +43,10 @@ def test_train_saves_and_evaluates(trained: Path, capsys) -> None:
 
 
 def test_train_episodes_tensorboard_other_env(tmp_path: Path, capsys) -> None:
-    assert main(["train", "--episodes", "30", "--n-envs", "2", "--eval-episodes", "10", "--tensorboard", str(tmp_path / "tb")]) == 0
+    assert (
+        main(["train", "--episodes", "30", "--n-envs", "2", "--eval-episodes", "10", "--tensorboard", str(tmp_path / "tb")])
+        == 0
+    )
     out = capsys.readouterr().out
     assert "30 episodes" in out and "mean distance" in out and "share >= 20 m" in out and "ball-loss rate" in out
     assert list((tmp_path / "tb").glob("SarsaAAC_RbfPolicy_1/events.out.tfevents.*"))
@@ -152,7 +155,9 @@ def test_errors_on_files(trained: Path, tmp_path: Path, capsys) -> None:
     (tmp_path / "notes.txt").write_text("hello")
     assert "must be a .zip or .aacp" in run_error(capsys, ["evaluate", str(tmp_path / "notes.txt")])
     (tmp_path / "broken.zip").write_bytes(b"PK\x03\x04 not really")
-    assert "broken.zip is not a usable saved model: it is not a zip archive" in run_error(capsys, ["evaluate", str(tmp_path / "broken.zip")])
+    assert "broken.zip is not a usable saved model: it is not a zip archive" in run_error(
+        capsys, ["evaluate", str(tmp_path / "broken.zip")]
+    )
     damaged = bytearray((trained / "policy.aacp").read_bytes())
     damaged[100] ^= 1
     (tmp_path / "damaged.aacp").write_bytes(bytes(damaged))
@@ -198,12 +203,17 @@ def test_damaged_models_are_one_line(trained: Path, tmp_path: Path, capsys) -> N
     members = {n: zipfile.ZipFile(trained / "model.zip").read(n) for n in zipfile.ZipFile(trained / "model.zip").namelist()}
     data = json.loads(members["data"])
     nan_weights = io.BytesIO()
-    th.save({k: v * float("nan") for k, v in th.load(io.BytesIO(members["policy.pth"]), weights_only=True).items()}, nan_weights)
+    th.save(
+        {k: v * float("nan") for k, v in th.load(io.BytesIO(members["policy.pth"]), weights_only=True).items()}, nan_weights
+    )
     cases = {
         "garbage_pth": ({"policy.pth": b"\x00garbage" * 50}, "'policy.pth' is not a torch tensor file"),
         "data_list": ({"data": b"[1, 2, 3]"}, "'data' member is a JSON list"),
         "missing_keys": ({"data": json.dumps({k: data[k] for k in list(data)[:3]}).encode()}, "lacks the fields"),
-        "wrong_space": ({"data": json.dumps({**data, "action_space": data["observation_space"]}).encode()}, "SarsaAAC.load failed"),
+        "wrong_space": (
+            {"data": json.dumps({**data, "action_space": data["observation_space"]}).encode()},
+            "SarsaAAC.load failed",
+        ),
         "nan_weights": ({"policy.pth": nan_weights.getvalue()}, "NaN or inf"),
     }
     for name, (changed, message) in cases.items():

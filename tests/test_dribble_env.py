@@ -58,7 +58,7 @@ def test_same_seed_same_episodes_and_another_seed_differs():
     first = rollout(DribbleEnv(), actions, seed=3)
     second = rollout(DribbleEnv(), actions, seed=3)
     other = rollout(DribbleEnv(), actions, seed=4)
-    for step, (a, b) in enumerate(zip(first, second)):
+    for step, (a, b) in enumerate(zip(first, second, strict=True)):
         np.testing.assert_array_equal(a, b, err_msg=f"item {step}")
     assert not np.array_equal(first[0], other[0])
 
@@ -73,7 +73,7 @@ def test_single_env_equals_a_one_lane_vec_env(profile):
     vec.seed(11)
     obs, _ = env.reset(seed=11)
     np.testing.assert_array_equal(vec.reset()[0], obs)
-    for kind, p in zip(kinds, params):
+    for kind, p in zip(kinds, params, strict=True):
         obs, reward, terminated, truncated, info = env.step(action(kind, p))
         vec_obs, vec_reward, vec_done, vec_info = vec.step([action(kind, p)])
         assert vec_reward[0] == np.float32(reward)
@@ -93,9 +93,9 @@ def test_vec_env_tuple_and_packed_steps_agree():
     np.testing.assert_array_equal(a.reset(), b.reset())
     for _ in range(50):
         kinds, params = rng.integers(4, size=8), rng.uniform(-1, 1, (8, 7))
-        out_a = a.step([action(k, p) for k, p in zip(kinds, params)])
+        out_a = a.step([action(k, p) for k, p in zip(kinds, params, strict=True)])
         out_b = b.step_packed(kinds, params.astype(np.float32).astype(np.float64))
-        for x, y in zip(out_a[:3], out_b[:3]):
+        for x, y in zip(out_a[:3], out_b[:3], strict=True):
             np.testing.assert_array_equal(x, y)
 
 
@@ -267,7 +267,7 @@ def test_invariants_under_random_and_extreme_actions(seed, kinds, params, profil
     s = vec.profile.server
     lanes = vec._lanes
     ball_cap = s.ball_speed_max * s.ball_decay * (1 + np.sqrt(2) * s.ball_rand) + 1e-9
-    for kind, p in zip(kinds, params):
+    for kind, p in zip(kinds, params, strict=True):
         obs, rewards, _, infos = vec.step_packed(np.array([kind]), np.array([p]))
         state, t = lanes.state[0], lanes.types[0]
         assert np.all(np.isfinite(state)) and np.all(np.isfinite(rewards))
@@ -310,7 +310,7 @@ def test_step_arrays_follows_the_array_path_protocol_and_gives_sb3_steps_transit
         params = (rng.uniform(-1, 1, (5, 7)) * [90, 1, 30, 1, 1, 1, 1]).astype(np.float32)  # as the tuple path sends them
         step = a.step_arrays(kinds, params.astype(np.float64))
         assert type(step)._fields == ArrayStep._fields
-        obs, rewards, dones, infos = b.step([action(k, p) for k, p in zip(kinds, params)])
+        obs, rewards, dones, infos = b.step([action(k, p) for k, p in zip(kinds, params, strict=True)])
         np.testing.assert_array_equal(step.observations, obs)
         np.testing.assert_array_equal(step.rewards.astype(np.float32), rewards)
         np.testing.assert_array_equal(step.terminated | step.truncated, dones)
@@ -346,7 +346,9 @@ def test_vec_env_renders_rgb_array_tiles():
     assert image.ndim == 3 and image.shape[2] == 3 and image.dtype == np.uint8
 
 
-@pytest.mark.parametrize("lanes", [np.array([10**8]), np.array([-1]), np.array([0, 0]), np.array([0.5]), np.zeros((1, 1), dtype=int)])
+@pytest.mark.parametrize(
+    "lanes", [np.array([10**8]), np.array([-1]), np.array([0, 0]), np.array([0.5]), np.zeros((1, 1), dtype=int)]
+)
 def test_lane_reset_rejects_bad_lane_indices_and_changes_nothing(lanes):
     vec = DribbleVecEnv(3)
     vec.seed(0)
@@ -397,15 +399,24 @@ def test_import_needs_no_torch():
 
 def any_action_type():
     return st.one_of(
-        st.integers(-5, 8), st.floats(allow_nan=True, allow_infinity=True), st.booleans(), st.none(), st.text(max_size=3),
-        st.complex_numbers(max_magnitude=5), st.sampled_from([np.int64(2), np.float32(1.0), np.bool_(True), np.uint8(3)]),
+        st.integers(-5, 8),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.booleans(),
+        st.none(),
+        st.text(max_size=3),
+        st.complex_numbers(max_magnitude=5),
+        st.sampled_from([np.int64(2), np.float32(1.0), np.bool_(True), np.uint8(3)]),
     )
 
 
 def any_part():
     return st.one_of(
-        st.lists(st.floats(allow_nan=True, allow_infinity=True, width=32), max_size=3).map(lambda v: np.array(v, dtype=np.float32)),
-        st.floats(allow_nan=False), st.none(), st.text(max_size=2),
+        st.lists(st.floats(allow_nan=True, allow_infinity=True, width=32), max_size=3).map(
+            lambda v: np.array(v, dtype=np.float32)
+        ),
+        st.floats(allow_nan=False),
+        st.none(),
+        st.text(max_size=2),
     )
 
 
@@ -434,15 +445,38 @@ def test_random_stream_version_2_is_pinned():
     assert RANDOM_STREAM_VERSION == 2
     env = DribbleEnv()
     obs, _ = env.reset(seed=0)
-    np.testing.assert_allclose(obs, [0.48255113, 0.0060132714, 0.74589932, 0.14589931, -0.80859733, 0.21261503, 0.057299733,
-                                     0.05839486, 0.073888212, -0.045026038], rtol=1e-6)
+    np.testing.assert_allclose(
+        obs,
+        [
+            0.48255113,
+            0.0060132714,
+            0.74589932,
+            0.14589931,
+            -0.80859733,
+            0.21261503,
+            0.057299733,
+            0.05839486,
+            0.073888212,
+            -0.045026038,
+        ],
+        rtol=1e-6,
+    )
     obs, reward, *_ = env.step(action(skills.KICK_VELOCITY, [0, 0.5, 10, 0, 0, 0, 0]))
-    np.testing.assert_allclose(obs[4:], [-0.38423112, 0.36308229, 0.43318358, 0.12052299, 0.036160424, -0.022063993], rtol=1e-5)
+    np.testing.assert_allclose(
+        obs[4:], [-0.38423112, 0.36308229, 0.43318358, 0.12052299, 0.036160424, -0.022063993], rtol=1e-5
+    )
     assert reward == pytest.approx(3.7467974, rel=1e-6)
 
 
-@pytest.mark.parametrize("make_part", [lambda v: v.astype(np.float32), lambda v: v.astype(np.float64),
-                                       lambda v: np.ascontiguousarray(v[::-1]).astype(np.float32)[::-1], list])
+@pytest.mark.parametrize(
+    "make_part",
+    [
+        lambda v: v.astype(np.float32),
+        lambda v: v.astype(np.float64),
+        lambda v: np.ascontiguousarray(v[::-1]).astype(np.float32)[::-1],
+        list,
+    ],
+)
 def test_tuple_actions_of_any_real_layout_step_like_their_arrays(make_part):
     """Float32 or float64 vectors, non-contiguous views and lists all give the transitions of their values."""
     rng = np.random.default_rng(5)
@@ -453,5 +487,6 @@ def test_tuple_actions_of_any_real_layout_step_like_their_arrays(make_part):
         kinds = rng.integers(4, size=3)
         params = (rng.uniform(-1, 1, (3, 7)) * [90, 1, 30, 1, 1, 1, 1]).astype(np.float32).astype(np.float64)
         step = a.step_arrays(kinds, params)
-        obs, _, _, _ = b.step([(int(k), tuple(make_part(p[s]) for s in skills.PARAM_SLICES)) for k, p in zip(kinds, params)])
+        actions = [(int(k), tuple(make_part(p[s]) for s in skills.PARAM_SLICES)) for k, p in zip(kinds, params, strict=True)]
+        obs, _, _, _ = b.step(actions)
         np.testing.assert_array_equal(step.observations, obs)

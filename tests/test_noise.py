@@ -17,8 +17,16 @@ from robocup_dribble import physics, validate
 from tests.conftest import golden_file
 
 CASES = list(validate.read_cases(golden_file("rcss-noise.jsonl")))
-COLUMNS = {"px": physics.P_X, "py": physics.P_Y, "pvx": physics.P_VX, "pvy": physics.P_VY,
-           "bx": physics.B_X, "by": physics.B_Y, "bvx": physics.B_VX, "bvy": physics.B_VY}
+COLUMNS = {
+    "px": physics.P_X,
+    "py": physics.P_Y,
+    "pvx": physics.P_VX,
+    "pvy": physics.P_VY,
+    "bx": physics.B_X,
+    "by": physics.B_Y,
+    "bvx": physics.B_VX,
+    "bvy": physics.B_VY,
+}
 RUNS = 4000
 
 

@@ -17,8 +17,17 @@ V11 = without_noise(make_profile("v11"))
 COMMANDS = {None: physics.CMD_NONE, "dash": physics.CMD_DASH, "kick": physics.CMD_KICK, "turn": physics.CMD_TURN}
 
 
-def one_cycle(command=None, power=0.0, direction=0.0, player=(0, 0, 0, 0), body=0.0, ball=(0, 25, 0, 0),
-              profile=V19, player_type=None, stamina=None):
+def one_cycle(
+    command=None,
+    power=0.0,
+    direction=0.0,
+    player=(0, 0, 0, 0),
+    body=0.0,
+    ball=(0, 25, 0, 0),
+    profile=V19,
+    player_type=None,
+    stamina=None,
+):
     """Run one server cycle from the given set-up; returns (state row, events row)."""
     player_type = player_type or default_player_type(profile)
     types = stack_player_types([player_type])
@@ -76,7 +85,7 @@ def test_t2_second_dash_and_speed_cap(profile, start, expected):
 )
 def test_t3_omnidirectional_dash(body, direction, power, player, expected):
     s, _ = one_cycle("dash", power, direction, player=player, body=body)
-    for got, want in zip(player_of(s), expected):
+    for got, want in zip(player_of(s), expected, strict=True):
         if want is not None:
             assert got == pytest.approx(want, abs=1e-8)
     assert s[physics.S_STAMINA] == (7995 if power == 50 else 7945)
@@ -205,14 +214,24 @@ def test_v11_effort_bug_raises_effort_from_the_decrease_threshold():
 def test_step_rejects_mismatched_shapes():
     state = physics.new_state(2)
     with pytest.raises(ValueError, match="commands must have shape"):
-        physics.step(state, np.zeros((2, physics.TYPE_SIZE)), np.zeros((3, 3)), np.zeros((2, physics.N_UNIFORMS)),
-                     physics.profile_constants(V19))
+        physics.step(
+            state,
+            np.zeros((2, physics.TYPE_SIZE)),
+            np.zeros((3, 3)),
+            np.zeros((2, physics.N_UNIFORMS)),
+            physics.profile_constants(V19),
+        )
 
 
 @pytest.mark.parametrize(
     ("state", "types", "commands", "message"),
     [
-        (np.zeros((2, physics.STATE_SIZE), dtype=np.float32), np.zeros((2, physics.TYPE_SIZE)), np.zeros((2, 3)), "state must be"),
+        (
+            np.zeros((2, physics.STATE_SIZE), dtype=np.float32),
+            np.zeros((2, physics.TYPE_SIZE)),
+            np.zeros((2, 3)),
+            "state must be",
+        ),
         (np.zeros((2, physics.STATE_SIZE))[:, ::-1], np.zeros((2, physics.TYPE_SIZE)), np.zeros((2, 3)), "C-contiguous"),
         (np.zeros((2, 5)), np.zeros((2, physics.TYPE_SIZE)), np.zeros((2, 3)), "state must have shape"),
         (np.zeros((2, physics.STATE_SIZE)), np.zeros((2, 3)), np.zeros((2, 3)), "types must have shape"),

@@ -34,7 +34,7 @@ def golden() -> dict:
 def assert_matches_printed(types: list[PlayerType], printed: list[dict]) -> None:
     """The server prints 6 significant digits."""
     assert len(types) == len(printed)
-    for t, p in zip(types, printed):
+    for t, p in zip(types, printed, strict=True):
         for name in TYPE_FIELDS:
             ours = getattr(t, name)
             assert math.isclose(ours, p[name], rel_tol=1e-5, abs_tol=1e-9), (p["id"], name, ours, p[name])
@@ -156,7 +156,7 @@ def test_server_runs_match(golden, run_name):
 def test_kick_rand_delta_factor_0_changes_only_kick_rand():
     base = generate_player_types("v19", 3)
     zero = generate_player_types("v19", 3, kick_rand_delta_factor=0.0)
-    for b, z in zip(base, zero):
+    for b, z in zip(base, zero, strict=True):
         assert z.kick_rand == 0.1
         assert b._replace(kick_rand=0.1) == z
 

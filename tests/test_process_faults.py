@@ -121,7 +121,6 @@ def test_a_damaged_cell_file_is_recomputed_and_named(tmp_path: Path) -> None:
 
 
 def test_a_live_runs_temporaries_and_running_cell_are_left_alone(tmp_path: Path) -> None:
-    from benchmarks import run as bench_run
 
     reference = GRID[0]
     (tmp_path / "cells").mkdir()

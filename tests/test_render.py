@@ -10,7 +10,7 @@ from gymnasium.error import DependencyNotInstalled
 
 pytest.importorskip("pygame")
 
-from robocup_dribble.render import BALL, LINE, PLAYER_EDGE, DribbleRenderer, RenderFrame  # noqa: E402
+from robocup_dribble.render import BALL, LINE, PLAYER_EDGE, DribbleRenderer, RenderFrame
 
 
 def frame(player=(10.0, 0.0), ball=(11.0, 2.0), body=0.0, **kw) -> RenderFrame:

@@ -29,6 +29,7 @@ from sb3_aac.wrappers import (
     scores_to_action,
 )
 
+
 @pytest.fixture(autouse=True)
 def one_torch_thread():
     # Tiny networks: a second thread only adds contention on a 2-core machine
@@ -381,7 +382,7 @@ def test_make_vec_env(vec_env_cls, layout):
             vec_env.reset()
             vec_env.action_space.seed(0)
             for _ in range(12):  # past the 10-step truncation
-                obs, rewards, dones, infos = vec_env.step(np.array([vec_env.action_space.sample() for _ in range(2)]))
+                obs, rewards, _dones, _infos = vec_env.step(np.array([vec_env.action_space.sample() for _ in range(2)]))
                 assert obs.shape == (2, 2) and rewards.shape == (2,) and all(0 <= r <= 1 for r in rewards)
         finally:
             vec_env.close()

@@ -110,8 +110,15 @@ class HandCodedDribbler:
         self.dash_directions = tuple(float(d) for d in dash_directions)
         self.safety, self.body_safety = safety, body_safety
         self.effort, self.effort_range = effort, effort_range
-        settings = {"horizon": horizon, "max_run": max_run, "dash_depth": dash_depth, "safety": safety,
-                    "body_safety": body_safety, "effort_low": effort_range[0], "effort_high": effort_range[1]}
+        settings = {
+            "horizon": horizon,
+            "max_run": max_run,
+            "dash_depth": dash_depth,
+            "safety": safety,
+            "body_safety": body_safety,
+            "effort_low": effort_range[0],
+            "effort_high": effort_range[1],
+        }
         self._settings = np.array([settings[name] for name in PLANNER_FIELDS], dtype=np.float64)
         self._directions = np.array([0.0] + [d for d in self.dash_directions if d != 0.0])
         angles = np.radians(END_ANGLES)

@@ -116,8 +116,20 @@ class DribbleLanes:
         self.episodes_in_set, self.type_ids, self.steps = a.episodes_in_set, a.type_ids, a.steps
         self.start_x, self.distance, self.returns = a.start_x, a.distance, a.returns
         g = self._settings
-        self._step_arrays = (a.state, a.types, a.steps, a.start_x, a.distance, a.returns, g.k, g.c, g.param_low,
-                             g.param_high, g.obs_low, g.obs_high)  # the fixed leading arguments of _step_lanes
+        self._step_arrays = (
+            a.state,
+            a.types,
+            a.steps,
+            a.start_x,
+            a.distance,
+            a.returns,
+            g.k,
+            g.c,
+            g.param_low,
+            g.param_high,
+            g.obs_low,
+            g.obs_high,
+        )  # the fixed leading arguments of _step_lanes
         self._uniforms = np.empty(0)  # values drawn from rng and not used yet
         self._position = np.zeros(1, dtype=np.int64)  # the next one to use
 
@@ -185,8 +197,17 @@ class DribbleLanes:
         """Start the next episode of ``lanes`` (in order); observations to ``obs[row]`` (``by_row``) or ``obs[lane]``."""
         first = 0
         while first < len(lanes):
-            first = _start_lanes(self.arrays, self._settings, self.profile.player.player_types, lanes, first, self._uniforms,
-                                 self._position, obs, by_row)
+            first = _start_lanes(
+                self.arrays,
+                self._settings,
+                self.profile.player.player_types,
+                lanes,
+                first,
+                self._uniforms,
+                self._position,
+                obs,
+                by_row,
+            )
             if first < len(lanes):  # ran short at lanes[first]: draw more and start it again
                 start = int(self._position[0])
                 self._uniforms = np.concatenate((self._uniforms[start:], self.rng.random(_DRAW_BLOCK)))
@@ -245,8 +266,26 @@ _DRAW_BLOCK = 4096  # uniforms drawn from the Generator at least per refill of t
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _start_lane(state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns, k, c,
-                recipe, i: int, uniforms, position, type_set, order_keys) -> bool:
+def _start_lane(
+    state,
+    types,
+    set_types,
+    set_ids,
+    episodes_in_set,
+    type_ids,
+    steps,
+    start_x,
+    distance,
+    returns,
+    k,
+    c,
+    recipe,
+    i: int,
+    uniforms,
+    position,
+    type_set,
+    order_keys,
+) -> bool:
     """Start lane ``i``'s next episode: its next player type (a fresh set when the set is used up), its start state
     and its episode statistics. Returns False, committing nothing, if ``uniforms`` ran short (the caller draws more
     and calls again from the same position). ``type_set`` ``(1, player_types, TYPE_SIZE)`` and ``order_keys``
@@ -279,8 +318,9 @@ def _start_lane(state, types, set_types, set_ids, episodes_in_set, type_ids, ste
 
 
 @njit(cache=True, error_model="numpy")
-def _start_lanes(a: LaneArrays, g: LaneSettings, player_types: int, lanes, first: int, uniforms, position, obs,
-                 by_row: bool) -> int:
+def _start_lanes(
+    a: LaneArrays, g: LaneSettings, player_types: int, lanes, first: int, uniforms, position, obs, by_row: bool
+) -> int:
     """Start ``lanes[first:]`` in order and write their observations; returns the index in ``lanes`` at which the
     uniforms ran short (that lane is not started), or ``len(lanes)``."""
     k, c, _, _, obs_low, obs_high, recipe = g
@@ -289,8 +329,26 @@ def _start_lanes(a: LaneArrays, g: LaneSettings, player_types: int, lanes, first
     for row in range(first, lanes.shape[0]):
         i = lanes[row]
         start = position[0]
-        if not _start_lane(state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns,
-                           k, c, recipe, i, uniforms, position, type_set, order_keys):
+        if not _start_lane(
+            state,
+            types,
+            set_types,
+            set_ids,
+            episodes_in_set,
+            type_ids,
+            steps,
+            start_x,
+            distance,
+            returns,
+            k,
+            c,
+            recipe,
+            i,
+            uniforms,
+            position,
+            type_set,
+            order_keys,
+        ):
             position[0] = start
             return row
         task.observe(state, i, types, i, obs_low, obs_high, obs, row if by_row else i)
@@ -298,9 +356,31 @@ def _start_lanes(a: LaneArrays, g: LaneSettings, player_types: int, lanes, first
 
 
 @njit(cache=True, error_model="numpy")
-def _step_lanes(state, types, steps, start_x, distance, returns, k, c, param_low, param_high, obs_low, obs_high,
-                kinds, params, uniforms, obs, rewards, terminated, truncated, distances, terminal_obs, episode_returns,
-                episode_lengths) -> np.ndarray:
+def _step_lanes(
+    state,
+    types,
+    steps,
+    start_x,
+    distance,
+    returns,
+    k,
+    c,
+    param_low,
+    param_high,
+    obs_low,
+    obs_high,
+    kinds,
+    params,
+    uniforms,
+    obs,
+    rewards,
+    terminated,
+    truncated,
+    distances,
+    terminal_obs,
+    episode_returns,
+    episode_lengths,
+) -> np.ndarray:
     """skills -> physics -> task for every lane (lane ``i`` uses ``uniforms[i]``); writes the :class:`LaneStep`
     fields it names and returns the lanes whose episode ended, in order."""
     ended = np.empty(state.shape[0], dtype=np.int64)

@@ -90,21 +90,72 @@ EVENT_SIZE = len(EVENT_FIELDS)
 
 # --- server constants as one float vector (numba takes arrays, not dataclasses) ------------------------------------------
 SERVER_CONSTANT_FIELDS = (
-    "ball_size", "ball_decay", "ball_rand", "ball_speed_max", "ball_accel_max", "player_rand", "player_accel_max",
-    "max_power", "min_power", "max_dash_power", "min_dash_power", "max_dash_angle", "min_dash_angle", "dash_angle_step",
-    "side_dash_rate", "back_dash_rate", "max_moment", "min_moment", "stamina_max", "stamina_capacity", "recover_init",
-    "recover_dec_thr", "recover_dec", "recover_min", "effort_dec_thr", "effort_dec", "effort_inc_thr", "effort_inc",
+    "ball_size",
+    "ball_decay",
+    "ball_rand",
+    "ball_speed_max",
+    "ball_accel_max",
+    "player_rand",
+    "player_accel_max",
+    "max_power",
+    "min_power",
+    "max_dash_power",
+    "min_dash_power",
+    "max_dash_angle",
+    "min_dash_angle",
+    "dash_angle_step",
+    "side_dash_rate",
+    "back_dash_rate",
+    "max_moment",
+    "min_moment",
+    "stamina_max",
+    "stamina_capacity",
+    "recover_init",
+    "recover_dec_thr",
+    "recover_dec",
+    "recover_min",
+    "effort_dec_thr",
+    "effort_dec",
+    "effort_inc_thr",
+    "effort_inc",
 )
 """The :class:`robocup_dribble.params.ServerParams` fields the kernel reads, under their own names."""
 BEHAVIOUR_FIELDS = ("bipedal", "dash_direction", "box_noise", "effort_bug")
 """The profile's version behaviours as 0/1 flags: two-leg dash, dash direction, box noise, v11 effort rise bug."""
 CONSTANT_FIELDS = SERVER_CONSTANT_FIELDS + BEHAVIOUR_FIELDS
 (
-    K_BALL_SIZE, K_BALL_DECAY, K_BALL_RAND, K_BALL_SPEED_MAX, K_BALL_ACCEL_MAX, K_PLAYER_RAND, K_PLAYER_ACCEL_MAX,
-    K_MAX_POWER, K_MIN_POWER, K_MAX_DASH_POWER, K_MIN_DASH_POWER, K_MAX_DASH_ANGLE, K_MIN_DASH_ANGLE, K_DASH_ANGLE_STEP,
-    K_SIDE_DASH_RATE, K_BACK_DASH_RATE, K_MAX_MOMENT, K_MIN_MOMENT, K_STAMINA_MAX, K_STAMINA_CAPACITY, K_RECOVER_INIT,
-    K_RECOVER_DEC_THR, K_RECOVER_DEC, K_RECOVER_MIN, K_EFFORT_DEC_THR, K_EFFORT_DEC, K_EFFORT_INC_THR, K_EFFORT_INC,
-    K_BIPEDAL, K_DASH_DIRECTION, K_BOX_NOISE, K_EFFORT_BUG,
+    K_BALL_SIZE,
+    K_BALL_DECAY,
+    K_BALL_RAND,
+    K_BALL_SPEED_MAX,
+    K_BALL_ACCEL_MAX,
+    K_PLAYER_RAND,
+    K_PLAYER_ACCEL_MAX,
+    K_MAX_POWER,
+    K_MIN_POWER,
+    K_MAX_DASH_POWER,
+    K_MIN_DASH_POWER,
+    K_MAX_DASH_ANGLE,
+    K_MIN_DASH_ANGLE,
+    K_DASH_ANGLE_STEP,
+    K_SIDE_DASH_RATE,
+    K_BACK_DASH_RATE,
+    K_MAX_MOMENT,
+    K_MIN_MOMENT,
+    K_STAMINA_MAX,
+    K_STAMINA_CAPACITY,
+    K_RECOVER_INIT,
+    K_RECOVER_DEC_THR,
+    K_RECOVER_DEC,
+    K_RECOVER_MIN,
+    K_EFFORT_DEC_THR,
+    K_EFFORT_DEC,
+    K_EFFORT_INC_THR,
+    K_EFFORT_INC,
+    K_BIPEDAL,
+    K_DASH_DIRECTION,
+    K_BOX_NOISE,
+    K_EFFORT_BUG,
 ) = (CONSTANT_FIELDS.index(f) for f in CONSTANT_FIELDS)  # unpacking checks the count; the names follow the fields
 N_CONSTANTS = len(CONSTANT_FIELDS)
 
@@ -403,15 +454,51 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
         body = normalize_angle(body + turned)
     elif kind == CMD_DASH:
         player_ax, player_ay, body, stamina = _dash(
-            power, direction, body, pvx, pvy, stamina, effort, types[ti, T_DASH_POWER_RATE], player_size,
-            types[ti, T_EXTRA_STAMINA], uniforms[ui, U_TURN], k,
+            power,
+            direction,
+            body,
+            pvx,
+            pvy,
+            stamina,
+            effort,
+            types[ti, T_DASH_POWER_RATE],
+            player_size,
+            types[ti, T_EXTRA_STAMINA],
+            uniforms[ui, U_TURN],
+            k,
         )
 
     # 2. movement (spec §5)
-    bx, by, bvx, bvy = _move(bx, by, bvx, bvy, ball_ax, ball_ay, k[K_BALL_ACCEL_MAX], k[K_BALL_SPEED_MAX], k[K_BALL_RAND],
-                             k[K_BALL_DECAY], uniforms[ui, U_BALL_R], uniforms[ui, U_BALL_A], box)
-    px, py, pvx, pvy = _move(px, py, pvx, pvy, player_ax, player_ay, k[K_PLAYER_ACCEL_MAX], types[ti, T_SPEED_MAX],
-                             k[K_PLAYER_RAND], types[ti, T_DECAY], uniforms[ui, U_PLAYER_R], uniforms[ui, U_PLAYER_A], box)
+    bx, by, bvx, bvy = _move(
+        bx,
+        by,
+        bvx,
+        bvy,
+        ball_ax,
+        ball_ay,
+        k[K_BALL_ACCEL_MAX],
+        k[K_BALL_SPEED_MAX],
+        k[K_BALL_RAND],
+        k[K_BALL_DECAY],
+        uniforms[ui, U_BALL_R],
+        uniforms[ui, U_BALL_A],
+        box,
+    )
+    px, py, pvx, pvy = _move(
+        px,
+        py,
+        pvx,
+        pvy,
+        player_ax,
+        player_ay,
+        k[K_PLAYER_ACCEL_MAX],
+        types[ti, T_SPEED_MAX],
+        k[K_PLAYER_RAND],
+        types[ti, T_DECAY],
+        uniforms[ui, U_PLAYER_R],
+        uniforms[ui, U_PLAYER_A],
+        box,
+    )
 
     # 3. collision (spec §6.1): push apart, both velocities times -0.1
     collided, px, py, bx, by = _collide(px, py, bx, by, ball_size + player_size, uniforms[ui, U_COLLIDE])
@@ -443,8 +530,18 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
 @njit(cache=True, error_model="numpy")
 def step_lane(s: np.ndarray, t: np.ndarray, c: np.ndarray, u: np.ndarray, k: np.ndarray, events: np.ndarray) -> None:
     """:func:`cycle` for one lane given as vectors (a state row, a type row, a command, its draws); writes ``events``."""
-    collided, kick_ok = cycle(s.reshape((1, STATE_SIZE)), 0, t.reshape((1, TYPE_SIZE)), 0, int(c[C_KIND]), c[C_POWER],
-                              c[C_DIRECTION], u.reshape((1, N_UNIFORMS)), 0, k)
+    collided, kick_ok = cycle(
+        s.reshape((1, STATE_SIZE)),
+        0,
+        t.reshape((1, TYPE_SIZE)),
+        0,
+        int(c[C_KIND]),
+        c[C_POWER],
+        c[C_DIRECTION],
+        u.reshape((1, N_UNIFORMS)),
+        0,
+        k,
+    )
     events[E_COLLISION], events[E_KICK_OK] = collided, kick_ok
 
 

@@ -224,8 +224,16 @@ def type_recipe(profile: ServerProfile) -> TypeRecipe:
     window = np.array([float(profile.hetero_acceptance == "speed_window"), s.max_power, s.player_speed_max_min - EPS])
     default = np.array(default_player_type(profile), dtype=np.float64)
     return TypeRecipe(
-        default, lo, span, np.array(check_start, dtype=np.int64), check_a.astype(np.float64), check_b.astype(np.float64),
-        strict.astype(np.bool_), column_step.astype(np.int64), column_a.astype(np.float64), column_b.astype(np.float64),
+        default,
+        lo,
+        span,
+        np.array(check_start, dtype=np.int64),
+        check_a.astype(np.float64),
+        check_b.astype(np.float64),
+        strict.astype(np.bool_),
+        column_step.astype(np.int64),
+        column_a.astype(np.float64),
+        column_b.astype(np.float64),
         window,
     )
 
@@ -333,8 +341,9 @@ def draw_type_table(profile: str | ServerProfile, n_sets: int, uniform: Uniform)
     return table
 
 
-def generate_player_types(profile: str | ServerProfile = "v19", seed: int = 1,
-                          kick_rand_delta_factor: float | None = None) -> list[PlayerType]:
+def generate_player_types(
+    profile: str | ServerProfile = "v19", seed: int = 1, kick_rand_delta_factor: float | None = None
+) -> list[PlayerType]:
     """The types a server generates with ``player::random_seed = seed`` (list index = type id); exact for v19 (§7.4).
 
     ``kick_rand_delta_factor`` overrides ``profile.player.kick_rand_delta_factor`` (the golden recordings use 0 with

@@ -48,7 +48,10 @@ DASH_MAX, KICK_VELOCITY, KICK_POSITION, KICK_ALIGN = (ACTION_NAMES.index(name) f
 N_ACTION_TYPES = len(ACTION_NAMES)
 
 ACTION_PARAMS = (
-    ("dash_direction",), ("kick_speed", "kick_direction"), ("position_x", "position_y"), ("align_speed", "align_offset")
+    ("dash_direction",),
+    ("kick_speed", "kick_direction"),
+    ("position_x", "position_y"),
+    ("align_speed", "align_offset"),
 )
 """The parameter names of each action type, in type order; a batch's ``(N, 7)`` parameters concatenate them."""
 PARAM_NAMES = tuple(name for names in ACTION_PARAMS for name in names)
@@ -124,8 +127,9 @@ def command(state, i, types, ti, kind: int, a: float, b: float, k: np.ndarray):
     # KICK_ALIGN: a: speed along the body (running) direction, b: lateral offset from the player's next position
     tx, ty = math.cos(body), math.sin(body)
     nx, ny = -ty, tx  # the player's right-hand side (+y when facing +x)
-    lateral = ((state[i, physics.B_X] - state[i, physics.P_X] - state[i, physics.P_VX]) * nx
-               + (state[i, physics.B_Y] - state[i, physics.P_Y] - state[i, physics.P_VY]) * ny)
+    lateral = (state[i, physics.B_X] - state[i, physics.P_X] - state[i, physics.P_VX]) * nx + (
+        state[i, physics.B_Y] - state[i, physics.P_Y] - state[i, physics.P_VY]
+    ) * ny
     correction = b - lateral
     return _kick_toward(state, i, types, ti, a * tx + correction * nx, a * ty + correction * ny, k)
 
@@ -136,7 +140,7 @@ def command_lane(s: np.ndarray, t: np.ndarray, kind: int, p: np.ndarray, k: np.n
     (``COMMAND_SIZE``)."""
     first = PARAM_STARTS[kind]
     b = p[first + 1] if PARAM_WIDTHS[kind] > 1 else 0.0
-    c_kind, power, direction = command(s.reshape((1, physics.STATE_SIZE)), 0, t.reshape((1, physics.TYPE_SIZE)), 0, kind,
-                                       p[first], b, k)
+    c_kind, power, direction = command(
+        s.reshape((1, physics.STATE_SIZE)), 0, t.reshape((1, physics.TYPE_SIZE)), 0, kind, p[first], b, k
+    )
     out[physics.C_KIND], out[physics.C_POWER], out[physics.C_DIRECTION] = c_kind, power, direction
-

@@ -36,8 +36,16 @@ from robocup_dribble.params import ServerProfile
 from robocup_dribble.player_types import next_uniform
 
 OBSERVATION_NAMES = (
-    "player_decay", "dash_power_rate", "kickable_margin", "kick_rand",
-    "ball_rel_x", "ball_rel_y", "ball_rel_vx", "ball_rel_vy", "player_vx", "player_vy",
+    "player_decay",
+    "dash_power_rate",
+    "kickable_margin",
+    "kick_rand",
+    "ball_rel_x",
+    "ball_rel_y",
+    "ball_rel_vx",
+    "ball_rel_vy",
+    "player_vx",
+    "player_vy",
 )
 """The observation's columns; the ``O_*`` constants are their indices."""
 (

@@ -187,7 +187,10 @@ def _options(case: dict) -> dict:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m robocup_dribble.validate", description=__doc__.split("\n\n")[0])
     parser.add_argument(
-        "files", nargs="*", type=Path, default=[GOLDEN_DIR / name for name in GOLDEN_FILES],
+        "files",
+        nargs="*",
+        type=Path,
+        default=[GOLDEN_DIR / name for name in GOLDEN_FILES],
         help="recorded cases, one JSON object per line (.jsonl); default: the shipped rcssserver 19.0.0 recordings",
     )
     parser.add_argument("--rtol", type=float, default=RTOL, help="relative tolerance (default: %(default)s)")

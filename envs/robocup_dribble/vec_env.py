@@ -118,8 +118,14 @@ class DribbleVecEnv(VecEnv):
         self._check_started()
         out = self._lanes.step(action_types, params)
         return ArrayStep(
-            out.observations, out.rewards, out.terminated, out.truncated, out.terminal_observations, out.episode_returns,
-            out.episode_lengths, {"distance": out.distances, "ball_lost": out.terminated},
+            out.observations,
+            out.rewards,
+            out.terminated,
+            out.truncated,
+            out.terminal_observations,
+            out.episode_returns,
+            out.episode_lengths,
+            {"distance": out.distances, "ball_lost": out.terminated},
         )
 
     def step_packed(self, action_types: np.ndarray, params: np.ndarray) -> VecEnvStepReturn:

@@ -154,9 +154,7 @@ class ParameterizedActionSpec:
     @cached_property
     def _box_views(self) -> tuple[tuple[slice, tuple[int, ...] | None], ...]:
         """Per type: its slice of the parameter vector, and the Box shape to reshape to (None if already 1-D)."""
-        return tuple(
-            (self.type_slice(k), None if len(box.shape) == 1 else box.shape) for k, box in enumerate(self.boxes)
-        )
+        return tuple((self.type_slice(k), None if len(box.shape) == 1 else box.shape) for k, box in enumerate(self.boxes))
 
     def type_slice(self, k: int) -> slice:
         """Slice of type ``k``'s parameters (0-based ``k``) in the concatenated vector."""
