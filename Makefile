@@ -4,7 +4,7 @@ PY := $(VENV)/bin/python
 # The CPU build of torch; a bare `torch` requirement would pull a multi-GB CUDA build.
 TORCH ?= torch==2.13.0
 
-.PHONY: install demo test bench docs
+.PHONY: install demo test lint bench docs
 install: $(VENV)/.installed
 
 $(VENV)/.installed: pyproject.toml
@@ -21,6 +21,13 @@ demo: install
 
 test: install
 	$(PY) -m pytest -q
+
+# The gates CI runs after the tests: ruff (lint, then the format check) and mypy (strict; files and exceptions in
+# pyproject.toml).
+lint: install
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+	$(VENV)/bin/mypy
 
 bench: install
 	$(PY) benchmarks/env_speed.py

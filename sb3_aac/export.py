@@ -120,7 +120,7 @@ def _features_header(policy: Any) -> dict[str, Any]:
             "tiles_per_input": bank.tiles_per_input,
             "n_tilings": bank.n_tilings,
             "n_codings": bank.n_active,
-            "group_size": int(bank.tile_inputs.shape[1]),
+            "group_size": int(np.shape(bank.tile_inputs)[1]),
             "n_features": bank.n_features,
         }
     if bank.n_rbf is None:
@@ -147,7 +147,7 @@ def encode_policy_file(header: dict[str, Any], arrays: dict[str, np.ndarray]) ->
     return body + hashlib.sha256(body).digest()
 
 
-def export_policy(model: Any, path: str | os.PathLike, metadata: dict[str, Any] | None = None) -> Path:
+def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, Any] | None = None) -> Path:
     """
     Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy`` v1).
 

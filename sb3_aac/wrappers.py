@@ -119,7 +119,7 @@ def _check_bins(bins: int | Sequence[int], n_params: int) -> tuple[int, ...]:
     if len(per_param) != n_params:
         raise ValueError(f"bins must be an int or one int per parameter ({n_params}), got {len(per_param)} values: {bins}")
     for b in per_param:
-        if isinstance(b, bool) or not isinstance(b, (int, np.integer)) or b < 1:
+        if isinstance(b, bool) or not isinstance(b, (int, np.integer)) or b < 1:  # type: ignore[redundant-expr]
             raise ValueError(f"Every bin count must be an int >= 1, got {bins}")
     return tuple(int(b) for b in per_param)
 
@@ -226,7 +226,8 @@ def action_to_grid(k: np.ndarray, params_scaled: np.ndarray, dims: Sequence[int]
     cell = np.minimum(np.rint(position), steps).astype(np.int64)
     own = np.repeat(np.arange(len(dims)), dims)[None, :] == k[:, None]  # the parameters type k owns
     first = np.concatenate([[0], np.cumsum(_type_sizes(dims, bins))])[:-1]
-    return first[k] + (cell * _strides(dims, bins) * own).sum(axis=1)
+    index: np.ndarray = first[k] + (cell * _strides(dims, bins) * own).sum(axis=1)
+    return index
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -276,7 +277,8 @@ class FlattenParameterizedAction(gym.ActionWrapper):
             parameters (in the shared and OneOf layouts the other types' parameters are 0, the middle of their range)
         """
         k, params_scaled = self.action_spec.from_env([action])
-        return action_to_scores(k, params_scaled, self.n_types)[0]
+        scores: np.ndarray = action_to_scores(k, params_scaled, self.n_types)[0]
+        return scores
 
 
 class DiscretizeParameterizedAction(gym.ActionWrapper):
@@ -324,8 +326,9 @@ class DiscretizeParameterizedAction(gym.ActionWrapper):
         if value.size != 1 or not np.issubdtype(value.dtype, np.integer):
             raise ValueError(f"Expected one integer discrete action, got {action!r}")
         index = int(value.item())
-        if not 0 <= index < self.action_space.n:
-            raise ValueError(f"Discrete action {index} out of range [0, {self.action_space.n})")
+        n_actions = len(self.types)
+        if not 0 <= index < n_actions:
+            raise ValueError(f"Discrete action {index} out of range [0, {n_actions})")
         return index
 
     def action(self, action: int | np.integer | np.ndarray) -> Any:
@@ -388,6 +391,6 @@ class SelectObservation(gym.ObservationWrapper):
         self.index = index
         self.observation_space = space.spaces[index]
 
-    def observation(self, observation: tuple) -> np.ndarray:
+    def observation(self, observation: tuple[Any, ...]) -> np.ndarray:
         """The kept part of ``observation``."""
         return np.asarray(observation[self.index], dtype=self.observation_space.dtype)

@@ -130,8 +130,8 @@ class DribbleEnv(gym.Env):
         self.observation_space = self._lanes.observation_space
         self._lane = np.zeros(1, dtype=np.int64)
         self._player_type: Any = None  # None until the first reset
-        self._ball_trail: deque = deque(maxlen=TRAIL_LENGTH)
-        self._player_trail: deque = deque(maxlen=TRAIL_LENGTH)
+        self._ball_trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_LENGTH)
+        self._player_trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_LENGTH)
         self._renderer: Any = None
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
@@ -169,7 +169,8 @@ class DribbleEnv(gym.Env):
 
         if self._renderer is None:
             self._renderer = DribbleRenderer(self.render_mode, fps=self.metadata["render_fps"])
-        return self._renderer.render(render_frame(self._lanes, 0, self._ball_trail, self._player_trail))
+        frame: np.ndarray | None = self._renderer.render(render_frame(self._lanes, 0, self._ball_trail, self._player_trail))
+        return frame
 
     def close(self) -> None:
         if self._renderer is not None:
@@ -185,7 +186,9 @@ class DribbleEnv(gym.Env):
         self._player_trail.append((s[0, physics.P_X], s[0, physics.P_Y]))
 
 
-def render_frame(lanes: DribbleLanes, lane: int, ball_trail: Iterable, player_trail: Iterable) -> Any:
+def render_frame(
+    lanes: DribbleLanes, lane: int, ball_trail: Iterable[tuple[float, float]], player_trail: Iterable[tuple[float, float]]
+) -> Any:
     """The :class:`robocup_dribble.render.RenderFrame` of a lane (imports the renderer's module on first use)."""
     from robocup_dribble.render import RenderFrame
 

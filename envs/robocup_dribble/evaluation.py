@@ -113,4 +113,5 @@ def running_ceiling(profile: str = "v19", n_players: int = 1000, cycles: int = 3
     constants = physics.profile_constants(server_profile)
     for _ in range(cycles):
         physics.step(state, types, commands, uniforms, constants)
-    return state[:, physics.P_X].copy()
+    distances: np.ndarray = state[:, physics.P_X].copy()
+    return distances

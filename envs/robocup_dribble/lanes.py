@@ -84,7 +84,7 @@ class DribbleLanes:
     """
 
     def __init__(self, n_lanes: int, profile: ServerProfile, task_settings: DribbleTask, rng: np.random.Generator) -> None:
-        if isinstance(n_lanes, bool) or not isinstance(n_lanes, (int, np.integer)) or n_lanes < 1:
+        if isinstance(n_lanes, bool) or not isinstance(n_lanes, (int, np.integer)) or n_lanes < 1:  # type: ignore[redundant-expr]
             raise ValueError(f"n_lanes must be an integer >= 1, got {n_lanes!r}")
         self.n_lanes = n = int(n_lanes)
         self.profile = profile
@@ -352,7 +352,7 @@ def _start_lanes(
             position[0] = start
             return row
         task.observe(state, i, types, i, obs_low, obs_high, obs, row if by_row else i)
-    return lanes.shape[0]
+    return int(lanes.shape[0])
 
 
 @njit(cache=True, error_model="numpy")

@@ -217,8 +217,8 @@ def check_array(name: str, array: np.ndarray, shape: tuple[int | None, ...], dty
     Every public function that hands arrays to a compiled kernel checks them with this first: the kernels do no
     bounds checks, so a wrong shape would read or write outside the arrays.
     """
-    if not isinstance(array, np.ndarray) or array.dtype != dtype or not array.flags.c_contiguous:
-        got = type(array).__name__ if not isinstance(array, np.ndarray) else f"{array.dtype} array"
+    if not isinstance(array, np.ndarray) or array.dtype != dtype or not array.flags.c_contiguous:  # type: ignore[redundant-expr]
+        got = type(array).__name__ if not isinstance(array, np.ndarray) else f"{array.dtype} array"  # type: ignore[redundant-expr]
         raise ValueError(f"{name} must be a C-contiguous {np.dtype(dtype)} numpy array, got {got}")
     mismatched = any(want is not None and got != want for got, want in zip(array.shape, shape, strict=False))
     if array.ndim != len(shape) or mismatched:

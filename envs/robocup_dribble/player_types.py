@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 from collections.abc import Callable, Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -136,7 +136,7 @@ class ServerRandom:
         self.used -= n
 
 
-def _steps(profile: ServerProfile) -> list:
+def _steps(profile: ServerProfile) -> list[Any]:
     """Spec §7.2 steps 1-8 in the server's order: ``((delta min, delta max), [(column, a, b, rule), ...])``.
 
     Each step draws one delta d and computes the values ``a + d * b``; ``column`` is the TYPE_FIELDS column the
@@ -323,7 +323,7 @@ def draw_type_table(profile: str | ServerProfile, n_sets: int, uniform: Uniform)
     :class:`ServerRandom` this is the server's stream, value for value.
     """
     prof = make_profile(profile)
-    if isinstance(n_sets, bool) or not isinstance(n_sets, (int, np.integer)) or n_sets < 0:
+    if isinstance(n_sets, bool) or not isinstance(n_sets, (int, np.integer)) or n_sets < 0:  # type: ignore[redundant-expr]
         raise ValueError(f"n_sets must be an integer >= 0, got {n_sets!r}")
     recipe = type_recipe(prof)
     table = np.empty((int(n_sets), prof.player.player_types, len(TYPE_FIELDS)))

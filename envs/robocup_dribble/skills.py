@@ -35,6 +35,7 @@ plus an ``(N, 7)`` array of all parameters (``PARAM_*`` columns).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
@@ -76,7 +77,7 @@ def parameter_bounds(profile: ServerProfile) -> tuple[np.ndarray, np.ndarray]:
     return low, high
 
 
-def action_space(profile: ServerProfile) -> spaces.Tuple:
+def action_space(profile: ServerProfile) -> spaces.Tuple[Any]:
     """``Tuple(Discrete(4), Tuple(Box(1), Box(2), Box(2), Box(2)))`` with the profile's physical bounds (float32)."""
     low, high = parameter_bounds(profile)
     boxes = tuple(spaces.Box(low[s].astype(np.float32), high[s].astype(np.float32), dtype=np.float32) for s in PARAM_SLICES)

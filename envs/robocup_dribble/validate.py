@@ -25,8 +25,9 @@ import dataclasses
 import json
 import math
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -40,7 +41,7 @@ GOLDEN_FILES = ("rcss-deterministic.jsonl", "rcss-noise.jsonl")
 """The files replayed when no file is given."""
 RTOL = 1e-5  # the server prints 6 significant digits
 ATOL = 1e-6
-_COMPARED = (
+_COMPARED: tuple[tuple[str, Callable[[dict[str, Any]], float], int], ...] = (
     ("player.x", lambda s: s["player"]["x"], physics.P_X),
     ("player.y", lambda s: s["player"]["y"], physics.P_Y),
     ("player.vx", lambda s: s["player"]["vx"], physics.P_VX),
@@ -74,7 +75,7 @@ class CaseResult:
         return self.worst_ratio <= 1.0 and not self.flag_mismatches
 
 
-def read_cases(path: str | Path) -> Iterator[dict]:
+def read_cases(path: str | Path) -> Iterator[dict[str, Any]]:
     """Yield the JSON records of a ``.jsonl`` file, with a clear error for a malformed line."""
     with open(path) as file:
         for number, line in enumerate(file, start=1):
@@ -86,7 +87,7 @@ def read_cases(path: str | Path) -> Iterator[dict]:
                 raise ValueError(f"{path}:{number}: not a JSON record ({error.msg})") from error
 
 
-def case_profile(case: dict) -> ServerProfile:
+def case_profile(case: dict[str, Any]) -> ServerProfile:
     """The server profile a case was recorded with: its version's profile plus its ``server::`` options."""
     version = str(case.get("server_version", "19"))
     base = PROFILES["v11"] if version.startswith("11.") else PROFILES["v19"]
@@ -96,7 +97,7 @@ def case_profile(case: dict) -> ServerProfile:
     return make_profile(base, **overrides)
 
 
-def case_player_type(case: dict, profile: ServerProfile) -> PlayerType:
+def case_player_type(case: dict[str, Any], profile: ServerProfile) -> PlayerType:
     """Type 0 from the profile; other types regenerated from the recorded ``player::`` options."""
     type_id = int(case.get("player_type_id", 0))
     if type_id == 0:
@@ -123,7 +124,7 @@ def parse_command(text: str | None) -> tuple[int, float, float]:
 
 
 def simulate_case(
-    case: dict, runs: int = 1, rng: np.random.Generator | None = None, profile: ServerProfile | None = None
+    case: dict[str, Any], runs: int = 1, rng: np.random.Generator | None = None, profile: ServerProfile | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Run a recorded case's commands from its set-up in ``runs`` independent lanes.
 
@@ -150,7 +151,7 @@ def simulate_case(
     return np.stack(states, axis=1), np.stack(events, axis=1)
 
 
-def replay_case(case: dict, rtol: float = RTOL, atol: float = ATOL) -> CaseResult:
+def replay_case(case: dict[str, Any], rtol: float = RTOL, atol: float = ATOL) -> CaseResult:
     """Replay one deterministic case and measure its largest deviation from the recording."""
     states, events = simulate_case(case)
     worst = (0.0, 0.0, "", 0)  # ratio, abs error, field, cycle
@@ -172,13 +173,15 @@ def replay_case(case: dict, rtol: float = RTOL, atol: float = ATOL) -> CaseResul
     return CaseResult(case.get("id", "?"), len(case["states"]), error, ratio, field, cycle, tuple(mismatches))
 
 
-def _deviation(simulated: float, recorded: float, rtol: float, atol: float, name: str, cycle: int):
+def _deviation(
+    simulated: float, recorded: float, rtol: float, atol: float, name: str, cycle: int
+) -> tuple[float, float, str, int]:
     error = abs(simulated - recorded)
     return error / (rtol * abs(recorded) + atol), error, name, cycle
 
 
-def _options(case: dict) -> dict:
-    options = case.get("server_options", {})
+def _options(case: dict[str, Any]) -> dict[str, Any]:
+    options: dict[str, Any] | str = case.get("server_options", {})
     if isinstance(options, str):  # some recorders store the dict's repr
         raise ValueError(f"case {case.get('id')}: server_options must be a JSON object")
     return options

@@ -84,7 +84,7 @@ class DribbleVecEnv(VecEnv):
         self.metadata = dict(DribbleEnv.metadata)  # VecEnv.__init__ replaced it with one lacking render_fps
         self._all = np.arange(self.num_envs)
         self._t_start = time.time()
-        self._player_types: list = [None] * self.num_envs
+        self._player_types: list[Any] = [None] * self.num_envs
         self._actions: np.ndarray | Sequence[Any] | None = None
         self._renderer: Any = None
         self._started = False

@@ -43,11 +43,11 @@ _SUPPORTED = (
 )
 
 
-def _unsupported(space: spaces.Space, why: str) -> ValueError:
+def _unsupported(space: spaces.Space[Any], why: str) -> ValueError:
     return ValueError(f"Unsupported parameterized action space {space}: {why}. Supported: {_SUPPORTED}.")
 
 
-def _check_box(space: spaces.Space, box: Any, what: str) -> spaces.Box:
+def _check_box(space: spaces.Space[Any], box: Any, what: str) -> spaces.Box:
     if not isinstance(box, spaces.Box):
         raise _unsupported(space, f"{what} is {box}, not a Box")
     if not np.issubdtype(box.dtype, np.floating):
@@ -77,7 +77,7 @@ class ParameterizedActionSpec:
     :param param_type: ``(n_params,)`` int array: the type that owns each scalar parameter
     """
 
-    space: spaces.Space
+    space: spaces.Space[Any]
     layout: str
     n_types: int
     start: int
@@ -89,7 +89,7 @@ class ParameterizedActionSpec:
     param_type: np.ndarray
 
     @classmethod
-    def from_space(cls, space: spaces.Space) -> ParameterizedActionSpec:
+    def from_space(cls, space: spaces.Space[Any]) -> ParameterizedActionSpec:
         """
         Parse and validate a parameterized action space.
 
@@ -139,11 +139,13 @@ class ParameterizedActionSpec:
 
     @cached_property
     def _mid(self) -> np.ndarray:
-        return (self.high + self.low) / 2
+        mid: np.ndarray = (self.high + self.low) / 2
+        return mid
 
     @cached_property
     def _half(self) -> np.ndarray:
-        return (self.high - self.low) / 2
+        half: np.ndarray = (self.high - self.low) / 2
+        return half
 
     @cached_property
     def _dtype(self) -> np.dtype | None:
@@ -164,7 +166,8 @@ class ParameterizedActionSpec:
         """Map parameters from ``[low, high]`` to ``[-1, 1]``. ``params``: ``(..., n_params)``; degenerate bounds give 0."""
         half = self._half
         centred = np.asarray(params, dtype=np.float64) - self._mid
-        return np.divide(centred, half, out=np.zeros(centred.shape), where=half > 0)
+        scaled: np.ndarray = np.divide(centred, half, out=np.zeros(centred.shape), where=half > 0)
+        return scaled
 
     def unscale(self, params_scaled: np.ndarray) -> np.ndarray:
         """
@@ -176,7 +179,8 @@ class ParameterizedActionSpec:
         weight = 0.5 * np.asarray(params_scaled, dtype=np.float64)
         value = self.low * (0.5 - weight) + self.high * (0.5 + weight)
         # minimum/maximum: np.clip costs several times more on small arrays.
-        return np.minimum(np.maximum(value, self.low), self.high)
+        clipped: np.ndarray = np.minimum(np.maximum(value, self.low), self.high)
+        return clipped
 
     def _env_params(self, params_scaled: np.ndarray) -> np.ndarray:
         params = self.unscale(params_scaled)
@@ -202,11 +206,11 @@ class ParameterizedActionSpec:
             out[i] = self._action(int(k[i]), params[i])
         return out
 
-    def to_env_single(self, k: int, params_scaled: np.ndarray) -> tuple:
+    def to_env_single(self, k: int, params_scaled: np.ndarray) -> tuple[Any, ...]:
         """Like :meth:`to_env` for one action: ``k`` an int, ``params_scaled`` of shape ``(n_params,)``."""
         return self._action(int(k), self._env_params(np.asarray(params_scaled)))
 
-    def _action(self, k: int, params: np.ndarray) -> tuple:
+    def _action(self, k: int, params: np.ndarray) -> tuple[Any, ...]:
         # params: (n_params,) unscaled, clipped (and cast if all Boxes share a dtype); a fresh array per call
         if not 0 <= k < self.n_types:
             raise ValueError(f"Action type {k} out of range [0, {self.n_types})")

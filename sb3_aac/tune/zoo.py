@@ -17,7 +17,9 @@ from sb3_aac.tune.search_spaces import policies, search_space, suggest
 ALGO = "sarsa_aac"
 
 
-def sample_sarsa_aac_params(trial: optuna.Trial, n_actions: int, n_envs: int, additional_args: dict) -> dict[str, Any]:
+def sample_sarsa_aac_params(
+    trial: optuna.Trial, n_actions: int, n_envs: int, additional_args: dict[str, Any]
+) -> dict[str, Any]:
     """SarsaAAC keyword arguments (``policy`` included) for ``trial``; the signature of rl-zoo3's samplers."""
     policy = suggest(trial, "policy", CategoricalDistribution(policies(ALGO)))
     return convert_sarsa_aac_params({"policy": policy, **search_space(ALGO, policy).sample(trial)})

@@ -55,13 +55,13 @@ class NavigationEnv(gym.Env):
         progress_weight: float = 0.5,
         step_cost: float = 0.01,
     ):
-        if not (isinstance(max_episode_steps, int) and max_episode_steps >= 1):
+        if not (isinstance(max_episode_steps, int) and max_episode_steps >= 1):  # type: ignore[redundant-expr]
             raise ValueError(f"max_episode_steps must be an int >= 1, got {max_episode_steps!r}")
         for name, value in (("radius", radius), ("max_move", max_move)):
-            if not (isinstance(value, (int, float)) and 0 < value < math.inf):
+            if not (isinstance(value, (int, float)) and 0 < value < math.inf):  # type: ignore[redundant-expr]
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
         for name, value in (("progress_weight", progress_weight), ("step_cost", step_cost)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value)):
+            if not (isinstance(value, (int, float)) and math.isfinite(value)):  # type: ignore[redundant-expr]
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
         self.max_episode_steps, self.radius, self.max_move = max_episode_steps, radius, max_move
         self.progress_weight, self.step_cost = progress_weight, step_cost
@@ -81,7 +81,7 @@ class NavigationEnv(gym.Env):
     def _distance(self) -> float:
         return float(np.hypot(*(self._target - self._position)))
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
         self._steps = 0
         self._position = self.np_random.uniform(-1.0, 1.0, 2)
@@ -91,7 +91,7 @@ class NavigationEnv(gym.Env):
         self._heading = float(self.np_random.uniform(-math.pi, math.pi))
         return self._observation(), {}
 
-    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         k = int(action[0])
         if k not in (0, 1):
             raise ValueError(f"Action type must be 0 (turn) or 1 (move), got {action[0]!r}")

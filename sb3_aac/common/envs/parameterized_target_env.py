@@ -74,6 +74,7 @@ class ParameterizedTargetEnv(gym.Env):
         self.check_action = check_action
         self.dims = [1] + [2] * (n_types - 1)
         boxes = [self._box(k) for k in range(n_types)]
+        shared = spaces.Box(np.array([-2.0, 0.0], np.float32), np.array([2.0, 10.0], np.float32))
         if layout == "nested":
             self.action_space = spaces.Tuple((spaces.Discrete(n_types), spaces.Tuple(boxes)))
         elif layout == "flat":
@@ -81,11 +82,10 @@ class ParameterizedTargetEnv(gym.Env):
         elif layout == "oneof":
             self.action_space = spaces.OneOf(boxes)
         else:
-            shared = spaces.Box(np.array([-2.0, 0.0], np.float32), np.array([2.0, 10.0], np.float32))
             self.action_space = spaces.Tuple((spaces.Discrete(n_types), shared))
         self.observation_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         # Bounds each type's parameters are read with: its own Box, or the shared one (first dims[k] coordinates).
-        param_boxes = [self.action_space[1]] * n_types if layout == "shared" else boxes
+        param_boxes = [shared] * n_types if layout == "shared" else boxes
         self._param_low = [box.low[:d].tolist() for box, d in zip(param_boxes, self.dims, strict=True)]
         self._param_high = [box.high[:d].tolist() for box, d in zip(param_boxes, self.dims, strict=True)]
         self._obs = np.zeros(2, np.float32)
@@ -122,13 +122,13 @@ class ParameterizedTargetEnv(gym.Env):
         value = np.ravel(value).tolist()[: self.dims[k]]
         return k, [(v - (hi + lo) / 2) / ((hi - lo) / 2) for v, lo, hi in zip(value, low, high, strict=True)]
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
         self._steps, self._distance = 0, 0.0
         self._obs = self.np_random.uniform(-1.0, 1.0, 2).astype(np.float32)
         return self._obs, {}
 
-    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self.check_action and not self.action_space.contains(action):
             raise ValueError(f"{action!r} is not an element of {self.action_space}")
         k, params = self._scaled_params(action)
