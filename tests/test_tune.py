@@ -188,7 +188,7 @@ def test_bad_arguments_exit_2(tmp_path: Path, capsys, argv: list[str], message: 
 
 
 def test_settings_and_spaces_validate() -> None:
-    with pytest.raises(ValueError, match="tunable policies: \\['MlpPolicy', 'RbfMlpPolicy', 'RbfPolicy'\\]"):
+    with pytest.raises(ValueError, match="tunable policies: \\['MlpPolicy', 'RbfMlpPolicy', 'RbfPolicy', 'TilePolicy'\\]"):
         TuneSettings(env_id=TOY, policy="TabularPolicy")
     with pytest.raises(ValueError, match="unknown algorithm 'pdqn'"):
         search_space("pdqn", "MlpPolicy")
@@ -210,6 +210,17 @@ def test_every_space_builds_a_model(policy: str) -> None:
         assert "gamma" not in params and "rbf_width" not in params
         model = SarsaAAC(policy, toy_envs(2, 0), seed=0, **settings.kwargs(params))
         assert model.gamma == 0.5 and model.policy.rbf_width == 1.5
+        model.learn(20)
+
+
+def test_tile_space_builds_a_model() -> None:
+    settings = TuneSettings(env_id=TOY, policy="TilePolicy", fixed={"gamma": 0.5})
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
+    for _ in range(3):
+        params = SEARCH_SPACES[("sarsa_aac", "TilePolicy")].sample(study.ask(), settings.fixed_names())
+        model = SarsaAAC("TilePolicy", toy_envs(2, 0), seed=0, **settings.kwargs(params))
+        assert model.gamma == 0.5
+        assert (model.policy.tiles_per_input, model.policy.n_tilings) == (params["tiles_per_input"], params["n_tilings"])
         model.learn(20)
 
 
