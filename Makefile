@@ -30,7 +30,7 @@ lint: install
 	$(VENV)/bin/mypy
 
 bench: install
-	$(PY) benchmarks/env_speed.py
+	$(PY) -m robocup_dribble.speed
 
 # The documentation site, built into site/ with warnings as errors (as CI does); open site/index.html.
 docs: $(VENV)/.docs-installed

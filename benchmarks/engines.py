@@ -32,7 +32,7 @@ from benchmarks.presets import Cell
 Record = Callable[[str, str, Any], None]
 
 # Set in every Ray worker process before it starts (numpy and torch read them at import): one BLAS/OpenMP thread
-# per cell, as the local pool does (benchmarks/run.py explains why).
+# per cell, as the local pool does (benchmarks/execution.py explains why).
 WORKER_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 # Variables of the driver a cell records (the command line, the invocation's provenance), passed to every task.
 FORWARDED_ENV_PREFIX = "SB3_AAC_BENCH_"

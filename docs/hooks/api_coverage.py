@@ -16,10 +16,9 @@ from typing import Any
 from mkdocs.config.defaults import MkDocsConfig
 
 PACKAGES = {"sb3_aac": Path("sb3_aac"), "robocup_dribble": Path("envs/robocup_dribble")}
-# module -> the page that documents it instead of an API rendering
+# module or package (with all its modules) -> the page that documents it instead of an API rendering
 NOT_RENDERED = {
     "sb3_aac.cli": "cli.md (the help text of every command)",
-    "sb3_aac.cli_tune": "cli.md (the help text of every command)",
 }
 AUTODOC = re.compile(r"^::: *([\w.]+)", flags=re.MULTILINE)
 
@@ -43,7 +42,7 @@ def on_post_build(config: MkDocsConfig, **kwargs: Any) -> None:
     for page in Path(config.docs_dir).rglob("*.md"):
         rendered.update(AUTODOC.findall(page.read_text(encoding="utf-8")))
     for module in package_modules(root):
-        if module in NOT_RENDERED:
+        if any(module == name or module.startswith(name + ".") for name in NOT_RENDERED):
             continue
         if not any(name == module or name.startswith(module + ".") for name in rendered):
             log.warning(

@@ -1,7 +1,7 @@
 """
 Hyperparameter tuning with Optuna (``pip install sb3-aac[tune]``): the search spaces, the study (TPE sampler, median
 pruner on periodic greedy evaluations, resumable storage), the report of the best settings, and rl-zoo3's sampler.
-The command line is ``sb3-aac tune`` (:mod:`sb3_aac.cli_tune`).
+The command line is ``sb3-aac tune`` (:mod:`sb3_aac.cli.tune`).
 """
 
 from sb3_aac.tune.evaluation import TrialEvaluation, greedy_score

@@ -6,18 +6,9 @@ import argparse
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from sb3_aac.cli import (
-    DRIBBLE_IDS,
-    POLICIES,
-    CliError,
-    check_env_id,
-    hyperparameters,
-    import_gym_packages,
-    key_value,
-    make_train_env,
-    positive_int,
-    seed_int,
-)
+from sb3_aac.cli.arguments import CliError, key_value, nonnegative_int, positive_int
+from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env
+from sb3_aac.cli.models import POLICIES, hyperparameters
 
 if TYPE_CHECKING:  # Optuna is an optional dependency: imported when the command runs
     from optuna import Study
@@ -72,7 +63,7 @@ def add_tune_command(add: Callable[..., argparse.ArgumentParser]) -> None:
     tune.add_argument("--study-name", help="default: sarsa_aac-POLICY-ENV; the same name and storage resume a study")
     tune.add_argument("--n-envs", type=positive_int, default=16, help="envs stepped side by side (default: %(default)s)")
     tune.add_argument(
-        "--seed", type=seed_int, default=0, help="training seed of every trial; sampler seed (default: %(default)s)"
+        "--seed", type=nonnegative_int, default=0, help="training seed of every trial; sampler seed (default: %(default)s)"
     )
     tune.add_argument(
         "--seeds-per-trial",

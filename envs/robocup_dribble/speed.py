@@ -1,6 +1,7 @@
 """How fast the dribbling environment steps: one env, SB3's DummyVecEnv of it, and the batched DribbleVecEnv.
 
-Usage: ``python benchmarks/env_speed.py [--profile v19] [--seconds 2]``
+Usage: ``python -m robocup_dribble.speed [--profile v19] [--seconds 2]`` (``sb3-aac bench`` runs it too). It ships
+with the package so that an installed copy can measure itself.
 
 Two action streams are timed. "random": uniformly random action types and parameters drawn once from a fixed seed;
 the ball is lost within about two steps, so resets run at their worst rate. "holding": KICK_POSITION(0.6, 0.4) every
@@ -22,6 +23,7 @@ import argparse
 import os
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from stable_baselines3.common.vec_env import DummyVecEnv
@@ -38,7 +40,7 @@ def random_actions(profile: str, n: int, rng: np.random.Generator) -> tuple[np.n
     return rng.integers(skills.N_ACTION_TYPES, size=n), rng.uniform(low, high, size=(n, skills.N_PARAMS))
 
 
-def as_tuple(kind: int, params: np.ndarray):
+def as_tuple(kind: int, params: np.ndarray) -> tuple[int, tuple[np.ndarray, ...]]:
     return int(kind), tuple(params[s].astype(np.float32) for s in skills.PARAM_SLICES)
 
 
@@ -59,11 +61,11 @@ def best_rate(run: Callable[[int], int], seconds: float) -> float:
     return max(rates)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--profile", default="v19", choices=["v19", "v11"])
     parser.add_argument("--seconds", type=float, default=2.0, help="time budget per measurement")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     rng = np.random.default_rng(0)
     kinds, params = random_actions(args.profile, ACTIONS, rng)
     holding = np.zeros(skills.N_PARAMS)
@@ -102,7 +104,7 @@ def measure(name: str, profile: str, kinds: np.ndarray, params: np.ndarray, seco
 
     def dummy_step(k: int) -> int:
         for i in range(k):
-            dummy.step([tuples[i % ACTIONS]])
+            dummy.step([tuples[i % ACTIONS]])  # type: ignore[arg-type]  # SB3 hints Box/Discrete arrays; Tuple actions are lists
         return k
 
     single_rate = best_rate(single, seconds)
@@ -119,7 +121,9 @@ def measure(name: str, profile: str, kinds: np.ndarray, params: np.ndarray, seco
             (np.resize(np.roll(kinds, -j), n), np.resize(np.roll(params, -j, axis=0), (n, skills.N_PARAMS))) for j in range(8)
         ]
 
-        def arrays(k: int, vec=vec, batches=batches, n=n) -> int:
+        def arrays(
+            k: int, vec: DribbleVecEnv = vec, batches: list[tuple[np.ndarray, np.ndarray]] = batches, n: int = n
+        ) -> int:
             for i in range(k):
                 vec.step_arrays(*batches[i % 8])
             return k * n
@@ -129,7 +133,7 @@ def measure(name: str, profile: str, kinds: np.ndarray, params: np.ndarray, seco
         if n == 64:
             tuple_batches = [[tuples[(j + i) % ACTIONS] for i in range(n)] for j in range(8)]
 
-            def via_tuples(k: int, vec=vec, tuple_batches=tuple_batches, n=n) -> int:
+            def via_tuples(k: int, vec: DribbleVecEnv = vec, tuple_batches: list[Any] = tuple_batches, n: int = n) -> int:
                 for i in range(k):
                     vec.step(tuple_batches[i % 8])
                 return k * n

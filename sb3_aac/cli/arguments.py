@@ -1,0 +1,100 @@
+"""What every command checks in its arguments: argparse types that say what is allowed, and input and output paths
+checked before any work. A user error is a :class:`CliError`: one line, exit status 2."""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import contextlib
+import math
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+from sb3_aac.common.output_files import check_writable_dir, check_writable_file, replaced_atomically
+
+
+class CliError(Exception):
+    """A user error: printed as one line, exit status 2."""
+
+
+def _checked(parse: Callable[[str], Any], what: str, accept: Callable[[Any], bool], requirement: str) -> Callable[[str], Any]:
+    """An argparse ``type``: parse the text, then check it, with a message saying what is allowed."""
+
+    def convert(text: str) -> Any:
+        try:
+            value = parse(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if not accept(value):
+            raise argparse.ArgumentTypeError(f"must be {requirement}, got {text}")
+        return value
+
+    return convert
+
+
+positive_int = _checked(lambda text: int(text.replace("_", "")), "a whole number", lambda v: v >= 1, "positive (>= 1)")
+positive_float = _checked(float, "a number", lambda v: v > 0 and math.isfinite(v), "a positive number")
+nonnegative_int = _checked(int, "a whole number", lambda v: v >= 0, ">= 0")
+
+
+def key_value(text: str) -> tuple[str, Any]:
+    key, sep, raw = text.partition("=")
+    if not sep or not key.strip():
+        raise argparse.ArgumentTypeError(f"expected key=value (e.g. gamma=0.95), got {text!r}")
+    try:
+        value = ast.literal_eval(raw)
+    except (ValueError, SyntaxError):
+        value = raw  # a bare word such as type_exploration=boltzmann
+    return key.strip(), value
+
+
+def output_file(path: str, suffixes: tuple[str, ...], what: str) -> Path:
+    """A file to write, checked before any work: the right extension, not a directory, its folder writable."""
+    out = Path(path)
+    if out.suffix.lower() not in suffixes:
+        raise CliError(f"{what} {path!r} must end with {' or '.join(suffixes)}")
+    if out.is_dir():
+        raise CliError(f"{what} {path!r} is a directory; give a file name ending with {' or '.join(suffixes)}")
+    try:
+        return check_writable_file(out, what)
+    except ValueError as error:
+        raise CliError(str(error)) from None
+
+
+def output_dir(path: str, what: str) -> Path:
+    """A directory to write into, checked before any work (created, then probed with a temporary file)."""
+    try:
+        return check_writable_dir(path, what)
+    except ValueError as error:
+        raise CliError(str(error)) from None
+
+
+@contextlib.contextmanager
+def written(out: Path) -> Iterator[Path]:
+    """A temporary name (same suffix) that replaces ``out`` in one step once written; a failed write is one line."""
+    try:
+        with replaced_atomically(out, suffix=out.suffix) as tmp:
+            yield tmp
+    except OSError as error:
+        raise CliError(f"cannot write {out}: {error.strerror or error}") from None
+
+
+def input_file(path: str, suffixes: tuple[str, ...], what: str) -> Path:
+    try:
+        return _input_file(Path(path), suffixes, what)
+    except (OSError, ValueError) as error:  # a name the system refuses: too long, a NUL byte, a loop of links
+        raise CliError(f"{what} {path!r} cannot be used: {getattr(error, 'strerror', None) or error}") from None
+
+
+def _input_file(source: Path, suffixes: tuple[str, ...], what: str) -> Path:
+    path = str(source)
+    if source.is_dir() and (source / "model.zip").is_file() and ".zip" in suffixes:
+        return source / "model.zip"  # the --out directory of train
+    if not source.exists():
+        raise CliError(f"{what} {path!r} does not exist (train one with: sb3-aac train --out DIR, then use DIR/model.zip)")
+    if source.is_dir():
+        raise CliError(f"{what} {path!r} is a directory without a model.zip; give the model file")
+    if source.suffix.lower() not in suffixes:
+        raise CliError(f"{what} {path!r} must be a {' or '.join(suffixes)} file (a model saved by train or an export)")
+    return source

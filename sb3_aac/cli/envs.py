@@ -1,0 +1,72 @@
+"""The envs the commands train and play: the dribbling ids and their server profiles, the toy env, envs other packages
+register (``--gym-package``), and the training env of an id."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from robocup_dribble import ENV_PROFILES
+from sb3_aac.cli.arguments import CliError
+
+DRIBBLE_IDS = ENV_PROFILES  # dribbling env id -> server profile (the one table, robocup_dribble's)
+PROFILE_ENV_IDS = {profile: env_id for env_id, profile in DRIBBLE_IDS.items()}
+TOY_ENV_ID = "sb3_aac/ParameterizedTarget-v0"
+
+
+def register_toy_env() -> None:
+    import gymnasium as gym
+
+    if TOY_ENV_ID not in gym.registry:
+        gym.register(TOY_ENV_ID, entry_point="sb3_aac.common.envs:ParameterizedTargetEnv")
+
+
+def import_gym_packages(names: list[str]) -> None:
+    import importlib
+
+    for name in names:
+        try:
+            importlib.import_module(name)
+        except (ImportError, TypeError, ValueError) as error:  # TypeError/ValueError: relative or empty names (".", "")
+            raise CliError(f"--gym-package {name!r} cannot be imported ({error}); is it installed / on PYTHONPATH?") from None
+
+
+def check_env_id(env_id: str) -> None:
+    import gymnasium as gym
+
+    register_toy_env()
+    if env_id not in gym.registry:
+        known = [*DRIBBLE_IDS, TOY_ENV_ID]
+        raise CliError(
+            f"unknown env id {env_id!r}; sb3-aac's ids are {known}. For another parameterized-action env, register it "
+            "with gymnasium and pass the module that registers it with --gym-package MODULE"
+        )
+
+
+def max_episode_length(env_id: str) -> int:
+    import gymnasium as gym
+
+    if env_id in DRIBBLE_IDS:
+        from robocup_dribble import DribbleTask
+
+        return DribbleTask().max_actions
+    spec = gym.spec(env_id)
+    if spec.max_episode_steps is not None:
+        return int(spec.max_episode_steps)
+    if env_id == TOY_ENV_ID:
+        return 10
+    raise CliError(f"{env_id} declares no max_episode_steps, so an --episodes budget has no step bound: use --timesteps")
+
+
+def make_train_env(env_id: str, n_envs: int, seed: int | None) -> Any:
+    if env_id in DRIBBLE_IDS:
+        from robocup_dribble import DribbleVecEnv
+
+        env = DribbleVecEnv(n_envs, profile=DRIBBLE_IDS[env_id])
+        env.seed(seed)
+        return env
+    from stable_baselines3.common.env_util import make_vec_env
+
+    try:
+        return make_vec_env(env_id, n_envs=n_envs, seed=seed)
+    except Exception as error:  # any failure of a third-party env's constructor
+        raise CliError(f"cannot make {env_id}: {type(error).__name__}: {error}") from None

@@ -1,0 +1,39 @@
+"""``sb3-aac export``: write a trained model's policy as a ``.aacp`` file for a runtime without torch."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from sb3_aac.cli.arguments import CliError, input_file, output_file
+from sb3_aac.cli.envs import PROFILE_ENV_IDS
+from sb3_aac.cli.models import load_model, model_matches_profile
+
+
+def add_export_command(add: Any) -> None:
+    """Add ``export`` through ``add(name, help, example)``."""
+    export = add(
+        "export",
+        "write MODEL's policy as plain arrays + JSON for a runtime without torch (sb3_aac.runtime.RuntimePolicy, C++)",
+        "sb3-aac export runs/rbf/model.zip dribbler.aacp",
+    )
+    export.add_argument("model", metavar="MODEL", help="a SarsaAAC model.zip")
+    export.add_argument("out", metavar="OUT", help="the policy file to write (.aacp); format: docs/export-format.md")
+    export.set_defaults(func=cmd_export)
+
+
+def cmd_export(args: argparse.Namespace) -> None:
+    from sb3_aac import RuntimePolicy, export_policy
+
+    source = input_file(args.model, (".zip",), "MODEL")
+    out = output_file(args.out, (".aacp",), "OUT")
+    model = load_model(source)
+    matches = [p for p in PROFILE_ENV_IDS if model_matches_profile(model, p)]
+    metadata = {"env_id": PROFILE_ENV_IDS[matches[0]]} if matches else {}
+    try:
+        path = export_policy(model, out, metadata=metadata)
+    except OSError as error:
+        raise CliError(f"cannot write {out}: {error.strerror or error}") from None
+    policy = RuntimePolicy.load(path)
+    print(f"wrote {path} ({path.stat().st_size} bytes): {policy!r}")
+    print("load it with: from sb3_aac.runtime import RuntimePolicy; RuntimePolicy.load(path).act(obs)  (numpy only)")

@@ -1,0 +1,119 @@
+"""The models the commands build and load: SarsaAAC's keyword arguments from ``--set``, a saved or exported model
+(or the hand-coded dribbler) checked to fit a dribbling profile."""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+from typing import Any
+
+from sb3_aac.cli.arguments import CliError, input_file
+from sb3_aac.cli.envs import PROFILE_ENV_IDS
+
+POLICIES = ("MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy")
+# SarsaAAC constructor arguments the CLI sets itself (not through --set).
+RESERVED = ("policy", "env", "tensorboard_log", "seed", "device", "verbose", "_init_setup_model")
+POLICY_KEYS = ("hidden_units", "n_rbf", "rbf_width", "obs_bounds", "tile_groups", "tiles_per_input", "n_tilings")
+MODEL_SUFFIXES = (".zip", ".aacp")
+
+
+def sarsa_keys() -> list[str]:
+    from sb3_aac import SarsaAAC
+
+    return [name for name in inspect.signature(SarsaAAC.__init__).parameters if name not in ("self", *RESERVED)]
+
+
+def hyperparameters(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """``--set`` pairs as SarsaAAC keyword arguments; policy arguments go into ``policy_kwargs``."""
+    valid = sarsa_keys()
+    kwargs: dict[str, Any] = {}
+    policy_kwargs: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in POLICY_KEYS:
+            policy_kwargs[key] = value
+        elif key in valid:
+            kwargs[key] = value
+        else:
+            hint = " (set it with its own option, e.g. --seed)" if key in RESERVED else ""
+            raise CliError(f"unknown --set key {key!r}{hint}; valid keys: {', '.join(sorted([*valid, *POLICY_KEYS]))}")
+    if policy_kwargs:
+        given = kwargs.get("policy_kwargs") or {}
+        if not isinstance(given, dict):
+            raise CliError(f"policy_kwargs must be a dict literal such as {{'n_rbf': 30}}, got {given!r}")
+        kwargs["policy_kwargs"] = {**given, **policy_kwargs}
+    return kwargs
+
+
+def load_policy(model: str, profile: str | None) -> tuple[Any, str]:
+    """A policy with ``predict`` and the dribbling profile it plays (given, or inferred from its spaces)."""
+    if model == "dribbler":
+        from robocup_dribble.dribbler import HandCodedDribbler
+
+        profile = profile or "v19"
+        return HandCodedDribbler(profile=profile), profile
+    path = input_file(model, MODEL_SUFFIXES, "MODEL")
+    if path.suffix.lower() == ".aacp":
+        from sb3_aac.runtime import RuntimePolicy
+
+        try:
+            policy = RuntimePolicy.load(path)
+        except (ValueError, OSError) as error:
+            raise CliError(f"cannot load {path}: {error}" if isinstance(error, OSError) else str(error)) from None
+        matches = [p for p in PROFILE_ENV_IDS if runtime_matches_profile(policy, p)]
+    else:
+        policy = load_model(path)
+        matches = [p for p in PROFILE_ENV_IDS if model_matches_profile(policy, p)]
+    if profile is None:
+        if not matches:
+            raise CliError(
+                f"{path} was not trained on a dribbling env (its spaces match neither {list(PROFILE_ENV_IDS)}); "
+                "this command runs the dribbling env, so it needs a dribbling model"
+            )
+        return policy, matches[0]
+    if profile not in matches:
+        found = f"it matches {matches[0]}" if matches else "it was not trained on a dribbling env"
+        raise CliError(f"{path} does not fit --profile {profile} ({found}); drop --profile to infer it")
+    return policy, profile
+
+
+def load_model(path: Path) -> Any:
+    """A SarsaAAC model.zip, checked first (:func:`~sb3_aac.common.model_files.load_checked`): any damage is one line."""
+    from sb3_aac import SarsaAAC
+    from sb3_aac.common.model_files import load_checked
+
+    try:
+        return load_checked(SarsaAAC, path)
+    except ValueError as error:
+        raise CliError(str(error)) from None
+    except OSError as error:
+        raise CliError(f"cannot load {path}: {error}") from None
+
+
+def dribble_spaces(profile: str) -> tuple[Any, Any]:
+    from robocup_dribble import DribbleEnv
+
+    env = DribbleEnv(profile=profile)
+    return env.observation_space, env.action_space
+
+
+def model_matches_profile(model: Any, profile: str) -> bool:
+    obs_space, action_space = dribble_spaces(profile)
+    return bool(model.observation_space == obs_space and model.action_space == action_space)
+
+
+def runtime_matches_profile(policy: Any, profile: str) -> bool:
+    import numpy as np
+
+    from sb3_aac.common.spaces import ParameterizedActionSpec
+
+    obs_space, action_space = dribble_spaces(profile)
+    spec = ParameterizedActionSpec.from_space(action_space)
+    return bool(
+        policy.obs_shape == obs_space.shape
+        and np.array_equal(policy.obs_low, obs_space.low.astype(np.float64))
+        and np.array_equal(policy.obs_high, obs_space.high.astype(np.float64))
+        and policy.layout == spec.layout
+        and policy.dims == spec.dims
+        and np.array_equal(policy.param_low, spec.low)
+        and np.array_equal(policy.param_high, spec.high)
+    )

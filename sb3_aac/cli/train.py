@@ -1,0 +1,175 @@
+"""``sb3-aac train``: train SarsaAAC on a registered env, save the run (model, exported policy, settings) as one set,
+and print a greedy evaluation. :func:`cmd_train` runs the steps in order; each step is its own function."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from typing import Any
+
+from sb3_aac.cli.arguments import CliError, key_value, nonnegative_int, output_dir, positive_int
+from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env, max_episode_length
+from sb3_aac.cli.models import POLICIES, hyperparameters
+from sb3_aac.cli.reports import print_dribble_report
+from sb3_aac.common.output_files import DirectoryPublisher
+
+DEFAULT_TIMESTEPS = 100_000
+EVAL_SEED_OFFSET = 10_000  # the greedy evaluation after training plays seed + this (never the training seeds)
+
+
+def add_train_command(add: Any) -> None:
+    """Add ``train`` through ``add(name, help, example)`` (see :func:`sb3_aac.cli.build_parser`)."""
+    train = add(
+        "train",
+        "train SarsaAAC, then print a greedy evaluation (metres, share >= 20 m, ball-loss rate)",
+        "sb3-aac train --env RoboCupDribblePaper-v0 --episodes 3000 --n-envs 16 --set n_rbf=30 --out runs/rbf",
+    )
+    train.add_argument("--env", default="RoboCupDribblePaper-v0", help="registered env id (default: %(default)s)")
+    train.add_argument("--policy", default="RbfPolicy", choices=POLICIES, help="function approximators (default: %(default)s)")
+    budget = train.add_mutually_exclusive_group()
+    budget.add_argument(
+        "--timesteps", type=positive_int, default=DEFAULT_TIMESTEPS, help="training budget in env steps (default: %(default)s)"
+    )
+    budget.add_argument(
+        "--episodes",
+        type=positive_int,
+        help="training budget in episodes (schedules span episodes x max episode length steps)",
+    )
+    train.add_argument("--n-envs", type=positive_int, default=16, help="envs stepped side by side (default: %(default)s)")
+    train.add_argument("--seed", type=nonnegative_int, default=0, help="random seed (default: %(default)s)")
+    train.add_argument("--tensorboard", metavar="DIR", help="write TensorBoard logs here (view: tensorboard --logdir DIR)")
+    train.add_argument("--progress-bar", action="store_true", help="show a progress bar (tqdm, rich)")
+    train.add_argument("--out", metavar="DIR", help="save DIR/model.zip, DIR/policy.aacp (exported) and DIR/run.json")
+    train.add_argument(
+        "--set",
+        metavar="KEY=VALUE",
+        type=key_value,
+        action="append",
+        default=[],
+        help="a SarsaAAC hyperparameter as a Python literal, repeatable: gamma=0.95, learning_rate=0.2, "
+        "type_exploration=boltzmann; policy arguments n_rbf, hidden_units, rbf_width go into policy_kwargs",
+    )
+    train.add_argument(
+        "--eval-episodes", type=nonnegative_int, default=1000, help="greedy evaluation episodes after training (0: none)"
+    )
+    train.add_argument(
+        "--gym-package", action="append", default=[], metavar="MODULE", help="import MODULE first (registers envs)"
+    )
+    train.add_argument("--verbose", type=int, default=0, choices=(0, 1, 2), help="SB3 verbosity: 1 prints the log table")
+    train.set_defaults(func=cmd_train)
+
+
+def cmd_train(args: argparse.Namespace) -> None:
+    """Check everything the user named, then train, save and evaluate; a failure leaves no partial ``--out``."""
+    import_gym_packages(args.gym_package)
+    check_env_id(args.env)
+    kwargs = hyperparameters(args.set)
+    if args.tensorboard is not None:
+        output_dir(args.tensorboard, "--tensorboard directory")
+    publisher = run_publisher(args.out) if args.out is not None else None
+    try:
+        total_timesteps, budget = training_budget(args)
+        model = build_model(args, kwargs)
+        print(f"training SarsaAAC {args.policy} on {args.env} for {budget}, {args.n_envs} env(s), seed {args.seed}")
+        learn(model, args, total_timesteps)
+        if publisher is not None:
+            save_run(model, publisher, run_settings(args, model, kwargs))
+        if args.eval_episodes > 0:
+            evaluate_greedy(model, args)
+    finally:
+        if publisher is not None:
+            publisher.discard()
+
+
+def run_publisher(out: str) -> DirectoryPublisher:
+    """The ``--out`` directory, checked before training; its files are staged and published as one set."""
+    try:
+        return DirectoryPublisher(out, "--out directory")
+    except ValueError as error:
+        raise CliError(str(error)) from None
+
+
+def training_budget(args: argparse.Namespace) -> tuple[int, str]:
+    """The step budget for ``learn`` and its description (``--episodes`` bounds steps by the max episode length)."""
+    if args.episodes is not None:
+        total_timesteps = args.episodes * max_episode_length(args.env)
+        return total_timesteps, f"{args.episodes} episodes (at most {total_timesteps} steps)"
+    return args.timesteps, f"{args.timesteps} steps"
+
+
+def build_model(args: argparse.Namespace, kwargs: dict[str, Any]) -> Any:
+    from sb3_aac import SarsaAAC
+
+    env = make_train_env(args.env, args.n_envs, args.seed)
+    try:
+        return SarsaAAC(args.policy, env, seed=args.seed, tensorboard_log=args.tensorboard, verbose=args.verbose, **kwargs)
+    except (ValueError, TypeError, AssertionError) as error:
+        raise CliError(f"cannot build SarsaAAC({args.policy}) on {args.env}: {error}") from None
+
+
+def learn(model: Any, args: argparse.Namespace, total_timesteps: int) -> None:
+    """``model.learn`` for the budget (stopped after ``--episodes`` finished episodes, if given); prints the time."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class StopAfterEpisodes(BaseCallback):
+        def __init__(self, episodes: int):
+            super().__init__()
+            self.episodes, self.finished = episodes, 0
+
+        def _on_step(self) -> bool:
+            self.finished += int(self.locals["dones"].sum())
+            return self.finished < self.episodes
+
+    callback = StopAfterEpisodes(args.episodes) if args.episodes is not None else None
+    start = time.perf_counter()
+    try:
+        model.learn(total_timesteps, callback=callback, progress_bar=args.progress_bar, tb_log_name=f"SarsaAAC_{args.policy}")
+    except FloatingPointError as error:
+        raise CliError(str(error)) from None
+    seconds = time.perf_counter() - start
+    print(f"trained {model.num_timesteps} steps ({model._episode_num} episodes) in {seconds:.1f} s")
+
+
+def run_settings(args: argparse.Namespace, model: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """What ``run.json`` records: the command's settings and what training did."""
+    return {
+        "env_id": args.env,
+        "policy": args.policy,
+        "seed": args.seed,
+        "n_envs": args.n_envs,
+        "timesteps": model.num_timesteps,
+        "episodes": model._episode_num,
+        "hyperparameters": {k: repr(v) for k, v in kwargs.items()},
+    }
+
+
+def save_run(model: Any, publisher: DirectoryPublisher, settings: dict[str, Any]) -> None:
+    """Write model.zip, policy.aacp and run.json into the staging directory, then publish them together."""
+    from sb3_aac import export_policy
+
+    staging = publisher.staging
+    try:
+        model.save(staging / "model.zip")
+        export_policy(model, staging / "policy.aacp", metadata={"env_id": settings["env_id"]})
+        (staging / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
+        out = publisher.publish()
+    except OSError as error:
+        raise CliError(f"cannot write the run to {publisher.out}: {error.strerror or error}") from None
+    print(f"saved {out / 'model.zip'} (SarsaAAC.load), {out / 'policy.aacp'} (RuntimePolicy.load) and {out / 'run.json'}")
+
+
+def evaluate_greedy(model: Any, args: argparse.Namespace) -> None:
+    """Print ``--eval-episodes`` greedy episodes: dribbling metrics on the dribbling envs, the return elsewhere."""
+    seed = EVAL_SEED_OFFSET + (args.seed or 0)
+    if args.env in DRIBBLE_IDS:
+        from robocup_dribble.evaluation import evaluate_dribbling
+
+        report = evaluate_dribbling(model, args.eval_episodes, profile=DRIBBLE_IDS[args.env], seed=seed)
+        print_dribble_report(report, f"greedy evaluation on {len(report.distances)} episodes of fresh players:")
+    else:
+        from stable_baselines3.common.evaluation import evaluate_policy
+
+        eval_env = make_train_env(args.env, 1, seed)
+        mean, std = evaluate_policy(model, eval_env, n_eval_episodes=args.eval_episodes, deterministic=True)
+        print(f"greedy evaluation over {args.eval_episodes} episodes: return {mean:.3f} +/- {std:.3f}")
