@@ -70,7 +70,7 @@ class PDQN(OffPolicyAlgorithm):
     actions are uniformly random. Time-limit truncations bootstrap from the terminal observation
     (``replay_buffer_kwargs=dict(handle_timeout_termination=...)``). Envs offering the array path
     (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; callbacks then see ``dones``,
-    ``rewards`` and ``new_obs`` in their locals but ``infos`` is None.
+    ``rewards``, ``new_obs``, ``k`` and ``params`` in their locals, but ``infos`` and ``actions`` are None.
 
     :param policy: The policy model to use (MlpPolicy, or a PDQNPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
@@ -338,12 +338,14 @@ class PDQN(OffPolicyAlgorithm):
         while should_collect_more_steps(train_freq, n_steps, n_episodes):
             k, params = self._sample_action(learning_starts, None, env.num_envs)
             infos: list[dict[str, Any]] | None = None
+            actions = None  # the env actions (an object array of tuples) on the SB3 path, for callbacks
             if arrays is not None:
                 step = arrays.step_arrays(k, spec.unscale(params))
                 new_obs, rewards, truncated = step.observations, step.rewards, step.truncated
                 dones = step.terminated | truncated
             else:
-                new_obs, rewards, dones, infos = env.step(spec.to_env(k, params))
+                actions = spec.to_env(k, params)
+                new_obs, rewards, dones, infos = env.step(actions)
                 truncated = np.array([bool(d and i.get("TimeLimit.truncated", False)) for d, i in zip(dones, infos, strict=True)])
             self.num_timesteps += env.num_envs
             n_steps += 1
