@@ -72,6 +72,13 @@ def test_load_other_algorithm_is_rejected(tmp_path):
     SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0).save(tmp_path / "sarsa.zip")
     with pytest.raises(ValueError, match="needs a PDQNPolicy"):
         PDQN.load(tmp_path / "sarsa.zip")
+    MPDQN("MlpPolicy", ParameterizedTargetEnv(), seed=0).save(tmp_path / "mpdqn.zip")
+    with pytest.raises(ValueError, match="multi-pass Q network: load it with MPDQN.load"):
+        PDQN.load(tmp_path / "mpdqn.zip")
+    PDQN("MlpPolicy", ParameterizedTargetEnv(), seed=0).save(tmp_path / "pdqn.zip")
+    with pytest.raises(ValueError, match="single-pass Q network: load it with PDQN.load"):
+        MPDQN.load(tmp_path / "pdqn.zip")
+    assert MPDQN.load(tmp_path / "mpdqn.zip").policy.multi_pass
 
 
 def run(algo, layout, seed, n_envs=2):

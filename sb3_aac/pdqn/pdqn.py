@@ -189,10 +189,15 @@ class PDQN(OffPolicyAlgorithm):
         self.max_grad_norm = max_grad_norm
         self.info_keywords = tuple(info_keywords)
         self.exploration_rate = exploration_initial_eps
+        # Saved with the model, so that loading it with the other class fails instead of changing the Q network.
+        self.q_network_passes = "multi" if self.multi_pass else "single"
         if _init_setup_model:
             self._setup_model()
 
     def _check_hyperparameters(self) -> None:
+        if self.q_network_passes != ("multi" if self.multi_pass else "single"):
+            saved = "MPDQN" if self.q_network_passes == "multi" else "PDQN"
+            raise ValueError(f"This model has a {self.q_network_passes}-pass Q network: load it with {saved}.load")
         if self.loss not in LOSSES:
             raise ValueError(f"Unknown loss {self.loss!r}, valid values: {list(LOSSES)}")
         for name in ("gamma", "tau", "actor_tau", "exploration_initial_eps", "exploration_final_eps"):
