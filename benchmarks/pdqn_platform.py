@@ -66,7 +66,7 @@ class GreedyEvaluation(BaseCallback):
     def _on_step(self) -> bool:
         if self.num_timesteps >= self.next_eval:
             self.next_eval += self.every
-            mean, std = evaluate_policy(self.model, self.eval_env, self.episodes, deterministic=True)
+            mean, _ = evaluate_policy(self.model, self.eval_env, self.episodes, deterministic=True)
             row = dict(steps=self.num_timesteps, episodes=self.model._episode_num, mean_return=round(float(mean), 4))
             self.history.append(row)
             print(json.dumps(row), flush=True)
@@ -86,12 +86,21 @@ def main() -> None:
     th.set_num_threads(1)
 
     algo = MPDQN if args.algo == "mpdqn" else PDQN
-    model = algo("MlpPolicy", make_env(args.seed), exploration_fraction=args.exploration_fraction, seed=args.seed, device="cpu", **PLATFORM_KWARGS)
+    model = algo(
+        "MlpPolicy",
+        make_env(args.seed),
+        exploration_fraction=args.exploration_fraction,
+        seed=args.seed,
+        device="cpu",
+        **PLATFORM_KWARGS,
+    )
     evaluation = GreedyEvaluation(args.eval_every, args.eval_episodes, args.seed)
     start = time.perf_counter()
     model.learn(args.steps, callback=evaluation)
     seconds = time.perf_counter() - start
-    returns, _ = evaluate_policy(model, make_env(args.seed + 2000), args.final_episodes, deterministic=True, return_episode_rewards=True)
+    returns, _ = evaluate_policy(
+        model, make_env(args.seed + 2000), args.final_episodes, deterministic=True, return_episode_rewards=True
+    )
     print(
         json.dumps(
             dict(

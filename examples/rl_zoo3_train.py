@@ -3,12 +3,13 @@ Train (or replay) SarsaAAC, P-DQN or MP-DQN with rl-zoo3, the RL Baselines3 Zoo.
 
 rl-zoo3 builds ``--algo``'s choices from ``rl_zoo3.ALGOS`` when it parses the command line, so an external algorithm
 is added by a wrapper script that registers it first (the pattern of rl-zoo3's own docs for SBX). This script
-registers ``sarsa_aac``, ``pdqn``, ``mpdqn`` and the dribbling envs, then hands the command line to rl-zoo3's ``train`` (or, with
-``--enjoy`` as the first argument, ``enjoy``)::
+registers ``sarsa_aac``, ``pdqn``, ``mpdqn`` and the dribbling envs, then hands the command line to rl-zoo3's
+``train`` (or, with ``--enjoy`` as the first argument, ``enjoy``)::
 
     pip install rl_zoo3
     python examples/rl_zoo3_train.py --algo sarsa_aac --env RoboCupDribblePaper-v0 --conf-file hyperparams/sarsa_aac.yml
-    python examples/rl_zoo3_train.py --algo mpdqn --env Platform-v0 --gym-packages gym_platform --conf-file hyperparams/mpdqn.yml
+    python examples/rl_zoo3_train.py --algo mpdqn --env Platform-v0 --gym-packages gym_platform \
+        --conf-file hyperparams/mpdqn.yml
     python examples/rl_zoo3_train.py --enjoy --algo sarsa_aac --env RoboCupDribblePaper-v0 -f logs/ --no-render
 
 Every rl-zoo3 option works (``-n`` steps, ``--seed``, ``--tensorboard-log``, ``--eval-freq``, ``-f`` log folder,

@@ -353,7 +353,8 @@ def cmd_train(args: argparse.Namespace) -> None:
 
     env = make_train_env(args.env, args.n_envs, args.seed)
     try:
-        model = algorithm(args.algo)(args.policy, env, seed=args.seed, tensorboard_log=args.tensorboard, verbose=args.verbose, **kwargs)
+        cls = algorithm(args.algo)
+        model = cls(args.policy, env, seed=args.seed, tensorboard_log=args.tensorboard, verbose=args.verbose, **kwargs)
     except (ValueError, TypeError, AssertionError) as error:
         raise CliError(f"cannot build {name}({args.policy}) on {args.env}: {error}") from None
     callback = StopAfterEpisodes(args.episodes) if args.episodes is not None else None
@@ -561,7 +562,7 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--env", default="RoboCupDribblePaper-v0", help="registered env id (default: %(default)s)")
     train.add_argument("--algo", default="sarsa_aac", choices=list(ALGOS), help="algorithm (default: %(default)s)")
     train.add_argument(
-        "--policy", choices=POLICIES, help="function approximators (default: RbfPolicy for sarsa_aac, MlpPolicy for pdqn/mpdqn)"
+        "--policy", choices=POLICIES, help="function approximators (default: RbfPolicy; MlpPolicy for pdqn/mpdqn)"
     )
     budget = train.add_mutually_exclusive_group()
     budget.add_argument("--timesteps", type=positive_int, help="training budget in env steps (default: 100000)")

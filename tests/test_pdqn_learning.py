@@ -19,6 +19,7 @@ TOY = dict(
 )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("algo, at_least", [(PDQN, 8.0), (MPDQN, 9.0)])
 def test_learns_the_known_optimum(algo, at_least):
     env = ParameterizedTargetEnv(layout="nested")

@@ -73,10 +73,10 @@ def test_load_other_algorithm_is_rejected(tmp_path):
     with pytest.raises(ValueError, match="needs a PDQNPolicy"):
         PDQN.load(tmp_path / "sarsa.zip")
     MPDQN("MlpPolicy", ParameterizedTargetEnv(), seed=0).save(tmp_path / "mpdqn.zip")
-    with pytest.raises(ValueError, match="multi-pass Q network: load it with MPDQN.load"):
+    with pytest.raises(ValueError, match=r"multi-pass Q network: load it with MPDQN\.load"):
         PDQN.load(tmp_path / "mpdqn.zip")
     PDQN("MlpPolicy", ParameterizedTargetEnv(), seed=0).save(tmp_path / "pdqn.zip")
-    with pytest.raises(ValueError, match="single-pass Q network: load it with PDQN.load"):
+    with pytest.raises(ValueError, match=r"single-pass Q network: load it with PDQN\.load"):
         MPDQN.load(tmp_path / "pdqn.zip")
     assert MPDQN.load(tmp_path / "mpdqn.zip").policy.multi_pass
 
@@ -118,7 +118,9 @@ class TestReplayBuffer:
         assert buffer.buffer_size == 4 and buffer.params.shape == (4, 2, 6)  # shared: each type owns a copy of Box(2)
         obs = np.array([[0.1, 0.2], [0.3, 0.4]], np.float32)
         params = np.linspace(-1, 1, 12).reshape(2, 6)
-        buffer.add(obs, -obs, np.array([0, 2]), params, np.array([1.0, 2.0]), np.array([False, True]), np.array([False, False]))
+        buffer.add(
+            obs, -obs, np.array([0, 2]), params, np.array([1.0, 2.0]), np.array([False, True]), np.array([False, False])
+        )
         np.testing.assert_array_equal(buffer.action_types[0], [0, 2])
         np.testing.assert_allclose(buffer.params[0], params, rtol=1e-6)
         np.testing.assert_array_equal(buffer.next_observations[0], -obs)
@@ -131,7 +133,15 @@ class TestReplayBuffer:
     def test_timeouts(self, handle):
         buffer = self.buffer(handle_timeout_termination=handle)
         for truncated in (True, False):
-            buffer.add(np.zeros(2), np.ones(2), np.array([1]), np.zeros((1, 6)), np.array([float(truncated)]), np.array([True]), np.array([truncated]))
+            buffer.add(
+                np.zeros(2),
+                np.ones(2),
+                np.array([1]),
+                np.zeros((1, 6)),
+                np.array([float(truncated)]),
+                np.array([True]),
+                np.array([truncated]),
+            )
         batch = buffer.sample(100, np.random.default_rng(0))
         timed_out = batch.rewards == 1.0
         assert th.all(batch.dones[~timed_out] == 1)
@@ -145,7 +155,15 @@ class TestReplayBuffer:
         obs = rng.uniform(-1, 1, (1, 2)).astype(np.float32)
         for step in range(13):  # wraps around the 8 rows
             next_obs = rng.uniform(-1, 1, (1, 2)).astype(np.float32)
-            args = (obs, next_obs, np.array([step % 3]), rng.uniform(-1, 1, (1, 6)), np.array([float(step)]), np.array([False]), np.array([False]))
+            args = (
+                obs,
+                next_obs,
+                np.array([step % 3]),
+                rng.uniform(-1, 1, (1, 6)),
+                np.array([float(step)]),
+                np.array([False]),
+                np.array([False]),
+            )
             regular.add(*args)
             compact.add(*args)
             obs = next_obs

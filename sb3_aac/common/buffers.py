@@ -45,8 +45,8 @@ class ParameterizedReplayBuffer:
     :param n_envs: Number of parallel environments
     :param optimize_memory_usage: Store each observation once: the next observation of row ``i`` is the
         observation of row ``i + 1`` (SB3's memory-efficient variant, about half the memory). The oldest row cannot
-        be sampled once the buffer is full, and the terminal observation of a finished episode is not kept, so it cannot be combined with
-        ``handle_timeout_termination``.
+        be sampled once the buffer is full, and the terminal observation of a finished episode is not kept, so it
+        cannot be combined with ``handle_timeout_termination``.
     :param handle_timeout_termination: Treat time-limit truncations as non-terminal (bootstrap from the terminal
         observation), as SB3 does
     """
@@ -77,7 +77,9 @@ class ParameterizedReplayBuffer:
         self.buffer_size = max(buffer_size // n_envs, 1)
         self.optimize_memory_usage = optimize_memory_usage
         self.handle_timeout_termination = handle_timeout_termination
-        self.device = th.device("cuda" if device == "auto" and th.cuda.is_available() else "cpu" if device == "auto" else device)
+        self.device = th.device(
+            "cuda" if device == "auto" and th.cuda.is_available() else "cpu" if device == "auto" else device
+        )
         self.pos, self.full = 0, False
         obs_shape, rows = observation_space.shape, (self.buffer_size, n_envs)
         self.observations = np.zeros((*rows, *obs_shape), dtype=np.float32)
@@ -148,9 +150,17 @@ class ParameterizedReplayBuffer:
         dones = self.dones[rows, envs]
         if self.handle_timeout_termination:
             dones = dones * (1.0 - self.timeouts[rows, envs])
-        arrays = (self.observations[rows, envs], self.action_types[rows, envs], self.params[rows, envs], next_obs, dones)
+
+        def tensor(array: np.ndarray) -> th.Tensor:
+            return th.as_tensor(array, device=self.device)
+
         return ParameterizedReplayBufferSamples(
-            *(th.as_tensor(a, device=self.device) for a in arrays), th.as_tensor(self.rewards[rows, envs], device=self.device)
+            observations=tensor(self.observations[rows, envs]),
+            action_types=tensor(self.action_types[rows, envs]),
+            params=tensor(self.params[rows, envs]),
+            next_observations=tensor(next_obs),
+            dones=tensor(dones),
+            rewards=tensor(self.rewards[rows, envs]),
         )
 
     def check_spaces(self, observation_space: spaces.Space, action_space: spaces.Space, n_envs: int) -> None:

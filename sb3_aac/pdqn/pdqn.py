@@ -225,7 +225,7 @@ class PDQN(OffPolicyAlgorithm):
             self.actor_lr_schedule,
             multi_pass=self.multi_pass,
             **self.policy_kwargs,
-        ).to(self.device)
+        ).to(self.device)  # type: ignore[assignment]
         if self.replay_buffer is None:
             self.replay_buffer = ParameterizedReplayBuffer(
                 self.buffer_size,
@@ -241,7 +241,11 @@ class PDQN(OffPolicyAlgorithm):
             self.exploration_initial_eps, self.exploration_final_eps, self.exploration_fraction
         )
         shape = (self.n_envs, self.policy.spec.n_params)
-        self._noise = None if self.param_noise is None else ParamNoise(self.param_noise, shape, self.param_noise_std, self.param_noise_theta)
+        self._noise = (
+            None
+            if self.param_noise is None
+            else ParamNoise(self.param_noise, shape, self.param_noise_std, self.param_noise_theta)
+        )
         self._reset_keyword_buffers()
 
     def set_random_seed(self, seed: int | None = None) -> None:
@@ -350,8 +354,10 @@ class PDQN(OffPolicyAlgorithm):
                 dones = step.terminated | truncated
             else:
                 actions = spec.to_env(k, params)
-                new_obs, rewards, dones, infos = env.step(actions)
-                truncated = np.array([bool(d and i.get("TimeLimit.truncated", False)) for d, i in zip(dones, infos, strict=True)])
+                new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
+                truncated = np.array(
+                    [bool(d and i.get("TimeLimit.truncated", False)) for d, i in zip(dones, infos, strict=True)]
+                )
             self.num_timesteps += env.num_envs
             n_steps += 1
 
@@ -469,7 +475,9 @@ class PDQN(OffPolicyAlgorithm):
 
     def _reset_keyword_buffers(self) -> None:
         """Windows of the ``info_keywords`` values of finished episodes (like ``ep_info_buffer``)."""
-        self._ep_keyword_buffers = {key: deque(maxlen=self._stats_window_size) for key in self.info_keywords}
+        self._ep_keyword_buffers: dict[str, deque[float]] = {
+            key: deque(maxlen=self._stats_window_size) for key in self.info_keywords
+        }
 
     def _setup_learn(
         self,

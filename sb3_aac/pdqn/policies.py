@@ -32,7 +32,12 @@ class QNetwork(nn.Module):
     """
 
     def __init__(
-        self, n_inputs: int, spec: ParameterizedActionSpec, net_arch: list[int], activation_fn: type[nn.Module], multi_pass: bool
+        self,
+        n_inputs: int,
+        spec: ParameterizedActionSpec,
+        net_arch: list[int],
+        activation_fn: type[nn.Module],
+        multi_pass: bool,
     ):
         super().__init__()
         self.n_types, self.multi_pass = spec.n_types, multi_pass
@@ -117,6 +122,9 @@ class PDQNPolicy(BasePolicy):
     :param optimizer_class: The optimizer of both networks
     :param optimizer_kwargs: Extra arguments of the optimizers
     """
+
+    obs_mid: th.Tensor
+    obs_half: th.Tensor
 
     def __init__(
         self,
@@ -218,6 +226,7 @@ class PDQNPolicy(BasePolicy):
         """``observation`` as a batch ``(n, *obs_shape)``, and whether it was a batch already."""
         obs = np.asarray(observation)
         shape = self.observation_space.shape
+        assert shape is not None  # a Box
         if obs.shape == shape:
             return obs.reshape(1, *shape), False
         if obs.shape[1:] == shape:
