@@ -4,9 +4,9 @@ SB3's TD3 and DQN, on the same env, machine and run.
 
 P-DQN and MP-DQN act in the env's own Tuple actions; TD3 learns through :class:`sb3_aac.FlattenParameterizedAction`
 (a Box) and DQN through :class:`sb3_aac.DiscretizeParameterizedAction` (a Discrete grid, 5 values per parameter), as
-in the benchmark's baselines. All four take one gradient step per env step (``train_freq=1``, ``gradient_steps=1``)
-on minibatches of 128 with two hidden layers of 64 units, so the figures compare the cost of the algorithms, not of
-their default settings.
+in the benchmark's baselines. All four take one gradient step per step of the vectorized env (``train_freq=1``,
+``gradient_steps=1``: one per ``n_envs`` transitions) on minibatches of 128 with two hidden layers of 64 units, so the
+figures compare the cost of the algorithms, not of their default settings.
 
 Usage: ``python benchmarks/pdqn_speed.py [--env RoboCupDribblePaper-v0] [--steps 5000] [--n-envs 1 16]``
 
@@ -58,7 +58,11 @@ def main() -> None:
     args = parser.parse_args()
     th.set_num_threads(1)
     print(f"{args.env}; torch threads 1; {args.steps} steps per measurement; load average {os.getloadavg()[0]:.1f}")
-    print(f"{'n_envs':>6} " + " ".join(f"{algo:>8}" for algo in ALGOS) + "   (env steps/s, one gradient step per env step)")
+    print(
+        f"{'n_envs':>6} "
+        + " ".join(f"{algo:>8}" for algo in ALGOS)
+        + "   (env steps/s; one gradient step per n_envs env steps)"
+    )
     for n_envs in args.n_envs:
         rates = [steps_per_second(build(algo, args.env, n_envs), args.steps) for algo in ALGOS]
         print(f"{n_envs:>6} " + " ".join(f"{rate:>8.0f}" for rate in rates), flush=True)
