@@ -71,3 +71,15 @@ def test_initial_params_set_the_actor_start():
     model = MPDQN("MlpPolicy", env, policy_kwargs=dict(initial_params=[1.5, 0.25, 7.5, 0.5, -0.5]), seed=0)
     action, _ = model.predict(np.zeros(2, np.float32), deterministic=True)
     np.testing.assert_allclose(np.concatenate(action[1]), [1.5, 0.25, 7.5, 0.5, -0.5], atol=1e-3)
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_dribble_vec_env(algo):
+    from robocup_dribble import DribbleVecEnv
+
+    env = DribbleVecEnv(4, profile="v11")
+    model = algo("MlpPolicy", env, seed=0, **SMALL)
+    model.learn(200)
+    assert model.num_timesteps == 200 and model._n_updates > 0
+    actions, _ = model.predict(env.reset(), deterministic=True)
+    assert all(env.action_space.contains(a) for a in actions)
