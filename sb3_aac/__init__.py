@@ -3,6 +3,7 @@
 import os
 
 from sb3_aac.export import export_policy
+from sb3_aac.pdqn import MPDQN, PDQN, PDQNPolicy
 from sb3_aac.runtime import RuntimePolicy
 from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy, TilePolicy
 from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction, SelectObservation
@@ -13,7 +14,10 @@ with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handle
 __all__ = [
     "DiscretizeParameterizedAction",
     "FlattenParameterizedAction",
+    "MPDQN",
     "MlpPolicy",
+    "PDQN",
+    "PDQNPolicy",
     "RbfMlpPolicy",
     "RbfPolicy",
     "RuntimePolicy",

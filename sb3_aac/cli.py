@@ -32,6 +32,12 @@ TOY_ENV_ID = "sb3_aac/ParameterizedTarget-v0"
 # SarsaAAC constructor arguments the CLI sets itself (not through --set).
 RESERVED = ("policy", "env", "tensorboard_log", "seed", "device", "verbose", "_init_setup_model")
 POLICY_KEYS = ("hidden_units", "n_rbf", "rbf_width", "obs_bounds", "tile_groups", "tiles_per_input", "n_tilings")
+# --algo: the class name in sb3_aac, its default policy, and the policy arguments --set may give.
+ALGOS = {
+    "sarsa_aac": ("SarsaAAC", "RbfPolicy", POLICY_KEYS),
+    "pdqn": ("PDQN", "MlpPolicy", ("net_arch", "actor_net_arch", "param_bounding", "initial_params")),
+    "mpdqn": ("MPDQN", "MlpPolicy", ("net_arch", "actor_net_arch", "param_bounding", "initial_params")),
+}
 MODEL_SUFFIXES = (".zip", ".aacp")
 VIDEO_SUFFIXES = (".gif", ".mp4")
 
@@ -208,25 +214,32 @@ def make_train_env(env_id: str, n_envs: int, seed: int | None) -> Any:
         raise CliError(f"cannot make {env_id}: {type(error).__name__}: {error}") from None
 
 
-def sarsa_keys() -> list[str]:
-    from sb3_aac import SarsaAAC
+def algorithm(algo: str) -> Any:
+    """The class ``--algo`` names."""
+    import sb3_aac
 
-    return [name for name in inspect.signature(SarsaAAC.__init__).parameters if name not in ("self", *RESERVED)]
+    return getattr(sb3_aac, ALGOS[algo][0])
 
 
-def hyperparameters(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    """``--set`` pairs as SarsaAAC keyword arguments; policy arguments go into ``policy_kwargs``."""
-    valid = sarsa_keys()
+def sarsa_keys(algo: str = "sarsa_aac") -> list[str]:
+    cls = algorithm(algo)
+    return [name for name in inspect.signature(cls.__init__).parameters if name not in ("self", *RESERVED)]
+
+
+def hyperparameters(pairs: list[tuple[str, Any]], algo: str = "sarsa_aac") -> dict[str, Any]:
+    """``--set`` pairs as keyword arguments of ``--algo``'s class; policy arguments go into ``policy_kwargs``."""
+    valid = sarsa_keys(algo)
+    policy_keys = ALGOS[algo][2]
     kwargs: dict[str, Any] = {}
     policy_kwargs: dict[str, Any] = {}
     for key, value in pairs:
-        if key in POLICY_KEYS:
+        if key in policy_keys:
             policy_kwargs[key] = value
         elif key in valid:
             kwargs[key] = value
         else:
             hint = " (set it with its own option, e.g. --seed)" if key in RESERVED else ""
-            raise CliError(f"unknown --set key {key!r}{hint}; valid keys: {', '.join(sorted([*valid, *POLICY_KEYS]))}")
+            raise CliError(f"unknown --set key {key!r}{hint}; valid keys: {', '.join(sorted([*valid, *policy_keys]))}")
     if policy_kwargs:
         given = kwargs.get("policy_kwargs") or {}
         if not isinstance(given, dict):
@@ -268,16 +281,23 @@ def load_policy(model: str, profile: str | None) -> tuple[Any, str]:
 
 
 def load_model(path: Path) -> Any:
-    """A SarsaAAC model.zip, checked first (:func:`~sb3_aac.common.model_files.load_checked`): any damage is one line."""
-    from sb3_aac import SarsaAAC
-    from sb3_aac.common.model_files import load_checked
+    """A model.zip saved by ``train``, whichever ``--algo`` trained it, checked first
+    (:func:`~sb3_aac.common.model_files.check_model_file`): any damage is one line."""
+    from sb3_aac.common.model_files import check_model_file, load_checked
 
+    errors = []
     try:
-        return load_checked(SarsaAAC, path)
+        check_model_file(path)
+        for algo, (name, _, _) in ALGOS.items():
+            try:
+                return load_checked(algorithm(algo), path)
+            except ValueError as error:
+                errors.append(f"as {name}: {error}")
     except ValueError as error:
         raise CliError(str(error)) from None
     except OSError as error:
         raise CliError(f"cannot load {path}: {error}") from None
+    raise CliError(f"cannot load {path}: " + "; ".join(errors))
 
 
 def dribble_spaces(profile: str) -> tuple[Any, Any]:
@@ -332,7 +352,10 @@ def _median(values: Any) -> float:
 def cmd_train(args: argparse.Namespace) -> None:
     import_gym_packages(args.gym_package)
     check_env_id(args.env)
-    kwargs = hyperparameters(args.set)
+    kwargs = hyperparameters(args.set, args.algo)
+    args.policy = args.policy or ALGOS[args.algo][1]
+    if args.algo != "sarsa_aac" and args.policy != "MlpPolicy":
+        raise CliError(f"--algo {args.algo} has one policy, MlpPolicy, not {args.policy}")
     if args.tensorboard is not None:
         output_dir(args.tensorboard, "--tensorboard directory")
     publisher = run_publisher(args.out) if args.out is not None else None
@@ -352,21 +375,25 @@ def run_publisher(out: str) -> DirectoryPublisher:
 
 
 def save_run(model: Any, publisher: DirectoryPublisher, settings: dict[str, Any]) -> None:
-    """Write model.zip, policy.aacp and run.json into the staging directory, then publish them together."""
+    """Write model.zip, policy.aacp (SarsaAAC only) and run.json into the staging directory, then publish them together."""
     from sb3_aac import export_policy
 
     staging = publisher.staging
+    exported = settings["algo"] == "sarsa_aac"  # the .aacp format carries SarsaAAC's approximators only (docs/pdqn.md)
     try:
         model.save(staging / "model.zip")
-        export_policy(model, staging / "policy.aacp", metadata={"env_id": settings["env_id"]})
+        if exported:
+            export_policy(model, staging / "policy.aacp", metadata={"env_id": settings["env_id"]})
         (staging / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
         out = publisher.publish()
     except OSError as error:
         raise CliError(f"cannot write the run to {publisher.out}: {error.strerror or error}") from None
-    print(f"saved {out / 'model.zip'} (SarsaAAC.load), {out / 'policy.aacp'} (RuntimePolicy.load) and {out / 'run.json'}")
+    runtime = f", {out / 'policy.aacp'} (RuntimePolicy.load)" if exported else ""
+    print(f"saved {out / 'model.zip'} ({ALGOS[settings['algo']][0]}.load){runtime} and {out / 'run.json'}")
 
 
 def train_and_publish(args: argparse.Namespace, kwargs: dict[str, Any], publisher: DirectoryPublisher | None) -> None:
+    name = ALGOS[args.algo][0]
     if args.episodes is not None:
         total_timesteps = args.episodes * max_episode_length(args.env)
         budget = f"{args.episodes} episodes (at most {total_timesteps} steps)"
@@ -375,8 +402,6 @@ def train_and_publish(args: argparse.Namespace, kwargs: dict[str, Any], publishe
         budget = f"{total_timesteps} steps"
 
     from stable_baselines3.common.callbacks import BaseCallback
-
-    from sb3_aac import SarsaAAC
 
     class StopAfterEpisodes(BaseCallback):
         def __init__(self, episodes: int):
@@ -389,14 +414,15 @@ def train_and_publish(args: argparse.Namespace, kwargs: dict[str, Any], publishe
 
     env = make_train_env(args.env, args.n_envs, args.seed)
     try:
-        model = SarsaAAC(args.policy, env, seed=args.seed, tensorboard_log=args.tensorboard, verbose=args.verbose, **kwargs)
+        cls = algorithm(args.algo)
+        model = cls(args.policy, env, seed=args.seed, tensorboard_log=args.tensorboard, verbose=args.verbose, **kwargs)
     except (ValueError, TypeError, AssertionError) as error:
-        raise CliError(f"cannot build SarsaAAC({args.policy}) on {args.env}: {error}") from None
+        raise CliError(f"cannot build {name}({args.policy}) on {args.env}: {error}") from None
     callback = StopAfterEpisodes(args.episodes) if args.episodes is not None else None
-    print(f"training SarsaAAC {args.policy} on {args.env} for {budget}, {args.n_envs} env(s), seed {args.seed}")
+    print(f"training {name} {args.policy} on {args.env} for {budget}, {args.n_envs} env(s), seed {args.seed}")
     start = time.perf_counter()
     try:
-        model.learn(total_timesteps, callback=callback, progress_bar=args.progress_bar, tb_log_name=f"SarsaAAC_{args.policy}")
+        model.learn(total_timesteps, callback=callback, progress_bar=args.progress_bar, tb_log_name=f"{name}_{args.policy}")
     except FloatingPointError as error:
         raise CliError(str(error)) from None
     seconds = time.perf_counter() - start
@@ -404,6 +430,7 @@ def train_and_publish(args: argparse.Namespace, kwargs: dict[str, Any], publishe
     print(f"trained {model.num_timesteps} steps ({episodes} episodes) in {seconds:.1f} s")
     if publisher is not None:
         settings = {
+            "algo": args.algo,
             "env_id": args.env,
             "policy": args.policy,
             "seed": args.seed,
@@ -592,7 +619,10 @@ def build_parser() -> argparse.ArgumentParser:
         "sb3-aac train --env RoboCupDribblePaper-v0 --episodes 3000 --n-envs 16 --set n_rbf=30 --out runs/rbf",
     )
     train.add_argument("--env", default="RoboCupDribblePaper-v0", help="registered env id (default: %(default)s)")
-    train.add_argument("--policy", default="RbfPolicy", choices=POLICIES, help="function approximators (default: %(default)s)")
+    train.add_argument("--algo", default="sarsa_aac", choices=list(ALGOS), help="algorithm (default: %(default)s)")
+    train.add_argument(
+        "--policy", choices=POLICIES, help="function approximators (default: RbfPolicy; MlpPolicy for pdqn/mpdqn)"
+    )
     budget = train.add_mutually_exclusive_group()
     budget.add_argument("--timesteps", type=positive_int, help="training budget in env steps (default: 100000)")
     budget.add_argument(
@@ -609,8 +639,9 @@ def build_parser() -> argparse.ArgumentParser:
         type=key_value,
         action="append",
         default=[],
-        help="a SarsaAAC hyperparameter as a Python literal, repeatable: gamma=0.95, learning_rate=0.2, "
-        "type_exploration=boltzmann; policy arguments n_rbf, hidden_units, rbf_width go into policy_kwargs",
+        help="a hyperparameter of --algo's class as a Python literal, repeatable: gamma=0.95, learning_rate=0.2, "
+        "type_exploration=boltzmann; policy arguments (n_rbf, hidden_units, rbf_width; for pdqn/mpdqn net_arch, "
+        "actor_net_arch, param_bounding, initial_params) go into policy_kwargs",
     )
     train.add_argument("--eval-episodes", type=int, default=1000, help="greedy evaluation episodes after training (0: none)")
     train.add_argument("--gym-package", action="append", default=[], metavar="MODULE", help="import MODULE first (registers envs)")
