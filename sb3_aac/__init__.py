@@ -3,6 +3,7 @@
 import os
 
 from sb3_aac.export import export_policy
+from sb3_aac.pdqn import MPDQN, PDQN, PDQNPolicy
 from sb3_aac.runtime import RuntimePolicy
 from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy, TilePolicy
 from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction, SelectObservation
@@ -11,9 +12,12 @@ with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handle
     __version__ = file_handler.read().strip()
 
 __all__ = [
+    "MPDQN",
+    "PDQN",
     "DiscretizeParameterizedAction",
     "FlattenParameterizedAction",
     "MlpPolicy",
+    "PDQNPolicy",
     "RbfMlpPolicy",
     "RbfPolicy",
     "RuntimePolicy",

@@ -1,5 +1,5 @@
-"""The models the commands build and load: SarsaAAC's keyword arguments from ``--set``, a saved or exported model
-(or the hand-coded dribbler) checked to fit a dribbling profile."""
+"""The models the commands build and load: the algorithms ``--algo`` names, their keyword arguments from ``--set``, a
+saved or exported model (or the hand-coded dribbler) checked to fit a dribbling profile."""
 
 from __future__ import annotations
 
@@ -14,28 +14,41 @@ POLICIES = ("MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy")
 # SarsaAAC constructor arguments the CLI sets itself (not through --set).
 RESERVED = ("policy", "env", "tensorboard_log", "seed", "device", "verbose", "_init_setup_model")
 POLICY_KEYS = ("hidden_units", "n_rbf", "rbf_width", "obs_bounds", "tile_groups", "tiles_per_input", "n_tilings")
+# --algo: the class name in sb3_aac, its default policy, and the policy arguments --set may give.
+ALGOS = {
+    "sarsa_aac": ("SarsaAAC", "RbfPolicy", POLICY_KEYS),
+    "pdqn": ("PDQN", "MlpPolicy", ("net_arch", "actor_net_arch", "param_bounding", "initial_params")),
+    "mpdqn": ("MPDQN", "MlpPolicy", ("net_arch", "actor_net_arch", "param_bounding", "initial_params")),
+}
 MODEL_SUFFIXES = (".zip", ".aacp")
 
 
-def sarsa_keys() -> list[str]:
-    from sb3_aac import SarsaAAC
+def algorithm(algo: str) -> Any:
+    """The class ``--algo`` names."""
+    import sb3_aac
 
-    return [name for name in inspect.signature(SarsaAAC.__init__).parameters if name not in ("self", *RESERVED)]
+    return getattr(sb3_aac, ALGOS[algo][0])
 
 
-def hyperparameters(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    """``--set`` pairs as SarsaAAC keyword arguments; policy arguments go into ``policy_kwargs``."""
-    valid = sarsa_keys()
+def sarsa_keys(algo: str = "sarsa_aac") -> list[str]:
+    cls = algorithm(algo)
+    return [name for name in inspect.signature(cls.__init__).parameters if name not in ("self", *RESERVED)]
+
+
+def hyperparameters(pairs: list[tuple[str, Any]], algo: str = "sarsa_aac") -> dict[str, Any]:
+    """``--set`` pairs as keyword arguments of ``--algo``'s class; policy arguments go into ``policy_kwargs``."""
+    valid = sarsa_keys(algo)
+    policy_keys = ALGOS[algo][2]
     kwargs: dict[str, Any] = {}
     policy_kwargs: dict[str, Any] = {}
     for key, value in pairs:
-        if key in POLICY_KEYS:
+        if key in policy_keys:
             policy_kwargs[key] = value
         elif key in valid:
             kwargs[key] = value
         else:
             hint = " (set it with its own option, e.g. --seed)" if key in RESERVED else ""
-            raise CliError(f"unknown --set key {key!r}{hint}; valid keys: {', '.join(sorted([*valid, *POLICY_KEYS]))}")
+            raise CliError(f"unknown --set key {key!r}{hint}; valid keys: {', '.join(sorted([*valid, *policy_keys]))}")
     if policy_kwargs:
         given = kwargs.get("policy_kwargs") or {}
         if not isinstance(given, dict):
@@ -77,16 +90,23 @@ def load_policy(model: str, profile: str | None) -> tuple[Any, str]:
 
 
 def load_model(path: Path) -> Any:
-    """A SarsaAAC model.zip, checked first (:func:`~sb3_aac.common.model_files.load_checked`): any damage is one line."""
-    from sb3_aac import SarsaAAC
-    from sb3_aac.common.model_files import load_checked
+    """A model.zip saved by ``train``, whichever ``--algo`` trained it, checked first
+    (:func:`~sb3_aac.common.model_files.check_model_file`): any damage is one line."""
+    from sb3_aac.common.model_files import check_model_file, load_checked
 
+    errors = []
     try:
-        return load_checked(SarsaAAC, path)
+        check_model_file(path)
+        for algo, (name, _, _) in ALGOS.items():
+            try:
+                return load_checked(algorithm(algo), path)
+            except ValueError as error:
+                errors.append(f"as {name}: {error}")
     except ValueError as error:
         raise CliError(str(error)) from None
     except OSError as error:
         raise CliError(f"cannot load {path}: {error}") from None
+    raise CliError(f"cannot load {path}: " + "; ".join(errors))
 
 
 def dribble_spaces(profile: str) -> tuple[Any, Any]:

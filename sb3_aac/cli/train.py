@@ -1,5 +1,6 @@
-"""``sb3-aac train``: train SarsaAAC on a registered env, save the run (model, exported policy, settings) as one set,
-and print a greedy evaluation. :func:`cmd_train` runs the steps in order; each step is its own function."""
+"""``sb3-aac train``: train SarsaAAC (or P-DQN / MP-DQN, ``--algo``) on a registered env, save the run (model,
+exported policy, settings) as one set, and print a greedy evaluation. :func:`cmd_train` runs the steps in order; each
+step is its own function."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from typing import Any
 
 from sb3_aac.cli.arguments import CliError, key_value, nonnegative_int, output_dir, positive_int
 from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env, max_episode_length
-from sb3_aac.cli.models import POLICIES, hyperparameters
+from sb3_aac.cli.models import ALGOS, POLICIES, algorithm, hyperparameters
 from sb3_aac.cli.reports import print_dribble_report
 from sb3_aac.common.output_files import DirectoryPublisher
 
@@ -26,7 +27,10 @@ def add_train_command(add: Any) -> None:
         "sb3-aac train --env RoboCupDribblePaper-v0 --episodes 3000 --n-envs 16 --set n_rbf=30 --out runs/rbf",
     )
     train.add_argument("--env", default="RoboCupDribblePaper-v0", help="registered env id (default: %(default)s)")
-    train.add_argument("--policy", default="RbfPolicy", choices=POLICIES, help="function approximators (default: %(default)s)")
+    train.add_argument("--algo", default="sarsa_aac", choices=list(ALGOS), help="algorithm (default: %(default)s)")
+    train.add_argument(
+        "--policy", choices=POLICIES, help="function approximators (default: RbfPolicy; MlpPolicy for pdqn/mpdqn)"
+    )
     budget = train.add_mutually_exclusive_group()
     budget.add_argument(
         "--timesteps", type=positive_int, default=DEFAULT_TIMESTEPS, help="training budget in env steps (default: %(default)s)"
@@ -47,8 +51,9 @@ def add_train_command(add: Any) -> None:
         type=key_value,
         action="append",
         default=[],
-        help="a SarsaAAC hyperparameter as a Python literal, repeatable: gamma=0.95, learning_rate=0.2, "
-        "type_exploration=boltzmann; policy arguments n_rbf, hidden_units, rbf_width go into policy_kwargs",
+        help="a hyperparameter of --algo's class as a Python literal, repeatable: gamma=0.95, learning_rate=0.2, "
+        "type_exploration=boltzmann; policy arguments (n_rbf, hidden_units, rbf_width; for pdqn/mpdqn net_arch, "
+        "actor_net_arch, param_bounding, initial_params) go into policy_kwargs",
     )
     train.add_argument(
         "--eval-episodes", type=nonnegative_int, default=1000, help="greedy evaluation episodes after training (0: none)"
@@ -64,14 +69,19 @@ def cmd_train(args: argparse.Namespace) -> None:
     """Check everything the user named, then train, save and evaluate; a failure leaves no partial ``--out``."""
     import_gym_packages(args.gym_package)
     check_env_id(args.env)
-    kwargs = hyperparameters(args.set)
+    kwargs = hyperparameters(args.set, args.algo)
+    args.policy = args.policy or ALGOS[args.algo][1]
+    if args.algo != "sarsa_aac" and args.policy != "MlpPolicy":
+        raise CliError(f"--algo {args.algo} has one policy, MlpPolicy, not {args.policy}")
     if args.tensorboard is not None:
         output_dir(args.tensorboard, "--tensorboard directory")
     publisher = run_publisher(args.out) if args.out is not None else None
     try:
         total_timesteps, budget = training_budget(args)
         model = build_model(args, kwargs)
-        print(f"training SarsaAAC {args.policy} on {args.env} for {budget}, {args.n_envs} env(s), seed {args.seed}")
+        print(
+            f"training {ALGOS[args.algo][0]} {args.policy} on {args.env} for {budget}, {args.n_envs} env(s), seed {args.seed}"
+        )
         learn(model, args, total_timesteps)
         if publisher is not None:
             save_run(model, publisher, run_settings(args, model, kwargs))
@@ -99,13 +109,12 @@ def training_budget(args: argparse.Namespace) -> tuple[int, str]:
 
 
 def build_model(args: argparse.Namespace, kwargs: dict[str, Any]) -> Any:
-    from sb3_aac import SarsaAAC
-
     env = make_train_env(args.env, args.n_envs, args.seed)
     try:
-        return SarsaAAC(args.policy, env, seed=args.seed, tensorboard_log=args.tensorboard, verbose=args.verbose, **kwargs)
+        cls = algorithm(args.algo)
+        return cls(args.policy, env, seed=args.seed, tensorboard_log=args.tensorboard, verbose=args.verbose, **kwargs)
     except (ValueError, TypeError, AssertionError) as error:
-        raise CliError(f"cannot build SarsaAAC({args.policy}) on {args.env}: {error}") from None
+        raise CliError(f"cannot build {ALGOS[args.algo][0]}({args.policy}) on {args.env}: {error}") from None
 
 
 def learn(model: Any, args: argparse.Namespace, total_timesteps: int) -> None:
@@ -124,7 +133,12 @@ def learn(model: Any, args: argparse.Namespace, total_timesteps: int) -> None:
     callback = StopAfterEpisodes(args.episodes) if args.episodes is not None else None
     start = time.perf_counter()
     try:
-        model.learn(total_timesteps, callback=callback, progress_bar=args.progress_bar, tb_log_name=f"SarsaAAC_{args.policy}")
+        model.learn(
+            total_timesteps,
+            callback=callback,
+            progress_bar=args.progress_bar,
+            tb_log_name=f"{ALGOS[args.algo][0]}_{args.policy}",
+        )
     except FloatingPointError as error:
         raise CliError(str(error)) from None
     seconds = time.perf_counter() - start
@@ -134,6 +148,7 @@ def learn(model: Any, args: argparse.Namespace, total_timesteps: int) -> None:
 def run_settings(args: argparse.Namespace, model: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
     """What ``run.json`` records: the command's settings and what training did."""
     return {
+        "algo": args.algo,
         "env_id": args.env,
         "policy": args.policy,
         "seed": args.seed,
@@ -145,18 +160,21 @@ def run_settings(args: argparse.Namespace, model: Any, kwargs: dict[str, Any]) -
 
 
 def save_run(model: Any, publisher: DirectoryPublisher, settings: dict[str, Any]) -> None:
-    """Write model.zip, policy.aacp and run.json into the staging directory, then publish them together."""
+    """Write model.zip, policy.aacp (SarsaAAC only) and run.json into the staging directory, then publish them together."""
     from sb3_aac import export_policy
 
     staging = publisher.staging
+    exported = settings["algo"] == "sarsa_aac"  # the .aacp format carries SarsaAAC's approximators only (docs/pdqn.md)
     try:
         model.save(staging / "model.zip")
-        export_policy(model, staging / "policy.aacp", metadata={"env_id": settings["env_id"]})
+        if exported:
+            export_policy(model, staging / "policy.aacp", metadata={"env_id": settings["env_id"]})
         (staging / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
         out = publisher.publish()
     except OSError as error:
         raise CliError(f"cannot write the run to {publisher.out}: {error.strerror or error}") from None
-    print(f"saved {out / 'model.zip'} (SarsaAAC.load), {out / 'policy.aacp'} (RuntimePolicy.load) and {out / 'run.json'}")
+    runtime = f", {out / 'policy.aacp'} (RuntimePolicy.load)" if exported else ""
+    print(f"saved {out / 'model.zip'} ({ALGOS[settings['algo']][0]}.load){runtime} and {out / 'run.json'}")
 
 
 def evaluate_greedy(model: Any, args: argparse.Namespace) -> None:

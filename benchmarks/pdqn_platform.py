@@ -1,0 +1,121 @@
+"""
+P-DQN / MP-DQN on Platform-v0 (PyPI ``hybrid-platform``): greedy mean return against env steps.
+
+The hyperparameters are the reference MP-DQN code's Platform settings (``hyperparams/mpdqn.yml``), except the
+training length: the reference trains 20,000 episodes; this script trains ``--steps`` env steps and evaluates the
+greedy policy every ``--eval-every`` steps on ``--eval-episodes`` fresh episodes, then once more on
+``--final-episodes`` (1,000 in the papers). It prints one line per evaluation and a final JSON line.
+
+Usage: ``python benchmarks/pdqn_platform.py [--algo mpdqn|pdqn] [--steps 100000] [--seed 0]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import gym_platform  # noqa: F401  (registers Platform-v0)
+import gymnasium as gym
+import numpy as np
+import torch as th
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.evaluation import evaluate_policy
+
+from sb3_aac import MPDQN, PDQN, SelectObservation
+
+# The reference code's Platform settings (run_platform_pdqn.py): gamma 0.9, minibatch 128, replay memory 10,000,
+# 500 transitions before learning, Adam 1e-3 (Q) / 1e-4 (actor), Polyak 0.1 (Q) / 0.001 (actor), OU noise with
+# sigma 1e-4, epsilon 1 -> 0.01, one hidden layer of 128 ReLUs, inverting gradients, MSE, gradient clip 10, and
+# the actor's parameters starting at (3, 10, 400).
+PLATFORM_KWARGS = dict(
+    learning_rate=1e-3,
+    actor_learning_rate=1e-4,
+    buffer_size=10_000,
+    learning_starts=500,
+    batch_size=128,
+    tau=0.1,
+    actor_tau=0.001,
+    gamma=0.9,
+    exploration_initial_eps=1.0,
+    exploration_final_eps=0.01,
+    param_noise="ornstein_uhlenbeck",
+    param_noise_std=1e-4,
+    loss="mse",
+    max_grad_norm=10.0,
+    info_keywords=(),
+    policy_kwargs=dict(net_arch=[128], initial_params=[3.0, 10.0, 400.0]),
+)
+
+
+def make_env(seed: int, n_envs: int = 1):
+    return make_vec_env(lambda: SelectObservation(gym.make("Platform-v0"), 0), n_envs=n_envs, seed=seed)
+
+
+class GreedyEvaluation(BaseCallback):
+    """Evaluates the greedy policy every ``every`` env steps and records (steps, episodes, mean return)."""
+
+    def __init__(self, every: int, episodes: int, seed: int):
+        super().__init__()
+        self.every, self.episodes = every, episodes
+        self.eval_env = make_env(seed + 1000)
+        self.history: list[dict] = []
+        self.next_eval = every
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self.next_eval:
+            self.next_eval += self.every
+            mean, _ = evaluate_policy(self.model, self.eval_env, self.episodes, deterministic=True)
+            row = dict(steps=self.num_timesteps, episodes=self.model._episode_num, mean_return=round(float(mean), 4))
+            self.history.append(row)
+            print(json.dumps(row), flush=True)
+        return True
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[1])
+    parser.add_argument("--algo", choices=["mpdqn", "pdqn"], default="mpdqn")
+    parser.add_argument("--steps", type=int, default=100_000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--exploration-fraction", type=float, default=0.1)
+    parser.add_argument("--eval-every", type=int, default=10_000)
+    parser.add_argument("--eval-episodes", type=int, default=100)
+    parser.add_argument("--final-episodes", type=int, default=1000)
+    args = parser.parse_args()
+    th.set_num_threads(1)
+
+    algo = MPDQN if args.algo == "mpdqn" else PDQN
+    model = algo(
+        "MlpPolicy",
+        make_env(args.seed),
+        exploration_fraction=args.exploration_fraction,
+        seed=args.seed,
+        device="cpu",
+        **PLATFORM_KWARGS,
+    )
+    evaluation = GreedyEvaluation(args.eval_every, args.eval_episodes, args.seed)
+    start = time.perf_counter()
+    model.learn(args.steps, callback=evaluation)
+    seconds = time.perf_counter() - start
+    returns, _ = evaluate_policy(
+        model, make_env(args.seed + 2000), args.final_episodes, deterministic=True, return_episode_rewards=True
+    )
+    print(
+        json.dumps(
+            dict(
+                algo=algo.__name__,
+                seed=args.seed,
+                env_steps=model.num_timesteps,
+                episodes=model._episode_num,
+                train_seconds=round(seconds, 1),
+                final_mean_return=round(float(np.mean(returns)), 4),
+                final_episodes=len(returns),
+                history=evaluation.history,
+            )
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,85 @@
+"""P-DQN / MP-DQN run with every action layout and the SB3 off-policy options (sb3-contrib's test_run shape)."""
+
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.evaluation import evaluate_policy
+
+from sb3_aac import MPDQN, PDQN
+from sb3_aac.common.envs import ParameterizedTargetEnv
+from tests.helpers import LAYOUTS
+
+ALGOS = [PDQN, MPDQN]
+SMALL = dict(learning_starts=50, batch_size=16, policy_kwargs=dict(net_arch=[16]))
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_run_every_layout(algo, layout):
+    env = ParameterizedTargetEnv(layout=layout)
+    check_env(env, skip_render_check=True)
+    model = algo("MlpPolicy", env, seed=0, **SMALL)
+    model.learn(200)
+    assert model.num_timesteps == 200 and model._n_updates > 0
+    obs, _ = env.reset(seed=0)
+    action, _ = model.predict(obs, deterministic=True)
+    assert isinstance(action, tuple) and env.action_space.contains(action)
+    evaluate_policy(model, model.get_env(), n_eval_episodes=2)
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(train_freq=(1, "episode"), gradient_steps=-1),
+        dict(train_freq=4, gradient_steps=2, target_update_interval=3),
+        dict(optimize_memory_usage=True, replay_buffer_kwargs=dict(handle_timeout_termination=False)),
+        dict(param_noise="gaussian", loss="huber"),
+        dict(param_noise=None, policy_kwargs=dict(net_arch=[8, 8], actor_net_arch=[4], param_bounding="tanh")),
+        dict(policy_kwargs=dict(initial_params=[1.0, 0.5, 5.0, 0.0, 0.0])),
+        dict(learning_rate=lambda progress: 1e-3 * progress, actor_learning_rate=lambda progress: 1e-4 * progress),
+    ],
+)
+def test_run_variants(algo, kwargs):
+    model = algo("MlpPolicy", ParameterizedTargetEnv(), seed=0, **{**SMALL, **kwargs})
+    model.learn(150)
+    assert model._n_updates > 0
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_multi_env_and_window(algo):
+    env = make_vec_env(ParameterizedTargetEnv, n_envs=3, env_kwargs=dict(layout="flat"))
+    model = algo("MlpPolicy", env, seed=0, stats_window_size=7, **SMALL)
+    model.learn(300)
+    assert model.num_timesteps == 300 and model.ep_info_buffer.maxlen == 7
+    actions, _ = model.predict(env.reset(), deterministic=False)
+    assert actions.shape == (3,) and all(env.action_space.contains(a) for a in actions)
+    assert model.replay_buffer.size() == 100  # rows of 3 transitions
+
+
+def test_episodic_train_freq_needs_one_env():
+    env = make_vec_env(ParameterizedTargetEnv, n_envs=2)
+    model = PDQN("MlpPolicy", env, train_freq=(1, "episode"), **SMALL)
+    with pytest.raises(ValueError, match="train_freq in episodes needs one env"):
+        model.learn(10)
+
+
+def test_initial_params_set_the_actor_start():
+    """The actor starts at initial_params (its last layer is nearly zero), as in the reference code."""
+    env = ParameterizedTargetEnv(layout="nested")
+    model = MPDQN("MlpPolicy", env, policy_kwargs=dict(initial_params=[1.5, 0.25, 7.5, 0.5, -0.5]), seed=0)
+    action, _ = model.predict(np.zeros(2, np.float32), deterministic=True)
+    np.testing.assert_allclose(np.concatenate(action[1]), [1.5, 0.25, 7.5, 0.5, -0.5], atol=1e-3)
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_dribble_vec_env(algo):
+    from robocup_dribble import DribbleVecEnv
+
+    env = DribbleVecEnv(4, profile="v11")
+    model = algo("MlpPolicy", env, seed=0, **SMALL)
+    model.learn(200)
+    assert model.num_timesteps == 200 and model._n_updates > 0
+    actions, _ = model.predict(env.reset(), deterministic=True)
+    assert all(env.action_space.contains(a) for a in actions)
