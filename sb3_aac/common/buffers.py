@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import torch as th
@@ -54,8 +54,8 @@ class ParameterizedReplayBuffer:
     def __init__(
         self,
         buffer_size: int,
-        observation_space: spaces.Space,
-        action_space: spaces.Space,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
         device: th.device | str = "auto",
         n_envs: int = 1,
         optimize_memory_usage: bool = False,
@@ -163,7 +163,7 @@ class ParameterizedReplayBuffer:
             rewards=tensor(self.rewards[rows, envs]),
         )
 
-    def check_spaces(self, observation_space: spaces.Space, action_space: spaces.Space, n_envs: int) -> None:
+    def check_spaces(self, observation_space: spaces.Space[Any], action_space: spaces.Space[Any], n_envs: int) -> None:
         """
         :raises ValueError: if this buffer was filled in other spaces or with another number of environments
         """

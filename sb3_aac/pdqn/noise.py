@@ -27,15 +27,16 @@ class ParamNoise:
         if not std >= 0 or not 0 <= theta <= 1:
             raise ValueError(f"Noise std must be >= 0 and theta in [0, 1], got std={std}, theta={theta}")
         self.kind, self.std, self.theta = kind, std, theta
-        self.state = np.zeros(shape)
+        self.state: np.ndarray = np.zeros(shape)
 
     def __call__(self, rng: np.random.Generator) -> np.ndarray:
         """The next noise sample ``(n_envs, n_params)``."""
-        increment = self.std * rng.standard_normal(self.state.shape)
+        increment: np.ndarray = self.std * rng.standard_normal(self.state.shape)
         if self.kind == "gaussian":
             return increment
         self.state += increment - self.theta * self.state
-        return self.state.copy()
+        sample: np.ndarray = self.state.copy()
+        return sample
 
     def reset(self, done: np.ndarray) -> None:
         """Restart the process of the environments where ``done`` (``(n_envs,)`` bool) is set."""

@@ -171,7 +171,7 @@ class PDQN(OffPolicyAlgorithm):
             # The action space is validated (with a ValueError) when the policy parses it.
             supported_action_spaces=None,
         )
-        if not (isinstance(self.policy_class, type) and issubclass(self.policy_class, PDQNPolicy)):
+        if not (isinstance(self.policy_class, type) and issubclass(self.policy_class, PDQNPolicy)):  # type: ignore[redundant-expr]
             raise ValueError(
                 f"{type(self).__name__} needs a PDQNPolicy (MlpPolicy or a subclass), got {self.policy_class} "
                 "(loading a model saved by another algorithm?)"
@@ -226,8 +226,9 @@ class PDQN(OffPolicyAlgorithm):
             multi_pass=self.multi_pass,
             **self.policy_kwargs,
         ).to(self.device)  # type: ignore[assignment]
+        # SB3 sets replay_buffer to None before this; the class annotation (no None) is for the training code.
         if self.replay_buffer is None:
-            self.replay_buffer = ParameterizedReplayBuffer(
+            self.replay_buffer = ParameterizedReplayBuffer(  # type: ignore[unreachable]
                 self.buffer_size,
                 self.observation_space,
                 self.action_space,
@@ -281,7 +282,7 @@ class PDQN(OffPolicyAlgorithm):
             k[explore] = self._rng.integers(self.policy.spec.n_types, size=int(explore.sum()))
         return k
 
-    def _sample_action(  # type: ignore[override]
+    def _sample_action(
         self, learning_starts: int, action_noise: ActionNoise | None = None, n_envs: int = 1
     ) -> tuple[np.ndarray, np.ndarray]:
         """Exploratory types ``(n_envs,)`` and scaled parameters ``(n_envs, n_params)`` in ``[-1, 1]``."""
@@ -380,7 +381,9 @@ class PDQN(OffPolicyAlgorithm):
         callback.on_rollout_end()
         return RolloutReturn(n_steps * env.num_envs, n_episodes, continue_training=True)
 
-    def _on_episodes_end(self, ended: np.ndarray, infos: list[dict] | None, step: Any, log_interval: int | None) -> None:
+    def _on_episodes_end(
+        self, ended: np.ndarray, infos: list[dict[str, Any]] | None, step: Any, log_interval: int | None
+    ) -> None:
         """Episode statistics of the envs in ``ended``, from the info dicts or from the array path's ``step``."""
         for i in ended:
             if infos is None:
@@ -427,7 +430,7 @@ class PDQN(OffPolicyAlgorithm):
             q = policy.q_net(features, data.params).gather(1, data.action_types.unsqueeze(1)).squeeze(1)
             q_loss = loss_fn(q, target)
             policy.q_optimizer.zero_grad()
-            q_loss.backward()
+            q_loss.backward()  # type: ignore[no-untyped-call]
             th.nn.utils.clip_grad_norm_(policy.q_net.parameters(), self.max_grad_norm)
             policy.q_optimizer.step()
 
@@ -519,9 +522,7 @@ class PDQN(OffPolicyAlgorithm):
 
     # ------------------------------------------------------------------ persistence
 
-    def load_replay_buffer(  # type: ignore[override]
-        self, path: str | pathlib.Path | io.BufferedIOBase, truncate_last_traj: bool = True
-    ) -> None:
+    def load_replay_buffer(self, path: str | pathlib.Path | io.BufferedIOBase, truncate_last_traj: bool = True) -> None:
         """
         Load a replay buffer saved by :meth:`save_replay_buffer`.
 

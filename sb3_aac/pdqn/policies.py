@@ -1,6 +1,6 @@
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch as th
@@ -42,6 +42,7 @@ class QNetwork(nn.Module):
         super().__init__()
         self.n_types, self.multi_pass = spec.n_types, multi_pass
         self.net = nn.Sequential(*create_mlp(n_inputs + spec.n_params, spec.n_types, net_arch, activation_fn))
+        self.owner_mask: th.Tensor
         # owner_mask[k, j] = 1 if scalar parameter j belongs to type k.
         owner_mask = th.as_tensor(spec.param_type == np.arange(spec.n_types)[:, None], dtype=th.float32)
         self.register_buffer("owner_mask", owner_mask, persistent=False)
@@ -49,12 +50,14 @@ class QNetwork(nn.Module):
     def forward(self, features: th.Tensor, params: th.Tensor) -> th.Tensor:
         """``(n, K)`` values of every type, given features ``(n, D)`` and scaled parameters ``(n, n_params)``."""
         if not self.multi_pass:
-            return self.net(th.cat((features, params), dim=1))
+            values: th.Tensor = self.net(th.cat((features, params), dim=1))
+            return values
         n, k = len(features), self.n_types
         # Pass j: features and only type j's parameters; rows j*n .. (j+1)*n - 1.
         masked = (params.unsqueeze(0) * self.owner_mask.unsqueeze(1)).reshape(k * n, -1)
         q_all = self.net(th.cat((features.repeat(k, 1), masked), dim=1)).reshape(k, n, k)
-        return q_all.diagonal(dim1=0, dim2=2)  # (n, K): Q_j taken from pass j
+        diagonal: th.Tensor = q_all.diagonal(dim1=0, dim2=2)  # (n, K): Q_j taken from pass j
+        return diagonal
 
 
 class ParamActor(nn.Module):
@@ -128,8 +131,8 @@ class PDQNPolicy(BasePolicy):
 
     def __init__(
         self,
-        observation_space: spaces.Space,
-        action_space: spaces.Space,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
         lr_schedule: Schedule,
         actor_lr_schedule: Schedule | None = None,
         net_arch: list[int] | None = None,
@@ -158,9 +161,10 @@ class PDQNPolicy(BasePolicy):
         self._build(lr_schedule)
 
     def _build(self, lr_schedule: Schedule) -> None:
-        spec, n_inputs = self.spec, int(np.prod(self.observation_space.shape))
-        low = np.asarray(self.observation_space.low, dtype=np.float64).ravel()
-        high = np.asarray(self.observation_space.high, dtype=np.float64).ravel()
+        box = cast(spaces.Box, self.observation_space)  # PDQN accepts Box observations only
+        spec, n_inputs = self.spec, int(np.prod(box.shape))
+        low = np.asarray(box.low, dtype=np.float64).ravel()
+        high = np.asarray(box.high, dtype=np.float64).ravel()
         finite = np.isfinite(low) & np.isfinite(high) & (high > low)
         self.register_buffer("obs_mid", th.as_tensor(np.where(finite, (high + low) / 2, 0.0), dtype=th.float32))
         self.register_buffer("obs_half", th.as_tensor(np.where(finite, (high - low) / 2, 1.0), dtype=th.float32))
@@ -181,8 +185,9 @@ class PDQNPolicy(BasePolicy):
         self.q_net_target = QNetwork(n_inputs, spec, self.net_arch, self.activation_fn, self.multi_pass)
         self.actor_target.load_state_dict(self.actor.state_dict())
         self.q_net_target.load_state_dict(self.q_net.state_dict())
-        self.q_optimizer = self.optimizer_class(self.q_net.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)
-        self.actor_optimizer = self.optimizer_class(
+        # SB3's optimizer_class is typed as the Optimizer base, whose constructor takes no lr (as in SB3's own policies).
+        self.q_optimizer = self.optimizer_class(self.q_net.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)  # type: ignore[call-arg]
+        self.actor_optimizer = self.optimizer_class(  # type: ignore[call-arg]
             self.actor.parameters(), lr=self.actor_lr_schedule(1), **self.optimizer_kwargs
         )
 
