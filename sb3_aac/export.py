@@ -123,7 +123,14 @@ def _features_header(policy: Any) -> dict[str, Any]:
         }
     if bank.n_rbf is None:
         return {"type": "scaled", "n_features": bank.n_features}
-    return {"type": "rbf", "n_rbf": bank.n_rbf, "rbf_width": float(policy.rbf_width), "n_features": bank.n_features}
+    window = None if bank.rbf_window is None else float(bank.rbf_window)
+    return {
+        "type": "rbf",
+        "n_rbf": bank.n_rbf,
+        "rbf_width": float(policy.rbf_width),
+        "rbf_window": window,
+        "n_features": bank.n_features,
+    }
 
 
 def encode_policy_file(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> bytes:
