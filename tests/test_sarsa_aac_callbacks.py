@@ -1,5 +1,6 @@
 import csv
 import os
+from itertools import pairwise
 
 import numpy as np
 import pytest
@@ -170,8 +171,8 @@ def test_logs_are_dumped_by_episodes_and_timesteps(tmp_path, log_min_timesteps: 
     steps = [0] + [int(row["time/total_timesteps"]) for row in rows]
     episodes = [0] + [int(row["time/episodes"]) for row in rows]
     assert len(rows) >= 1
-    assert all(b - a >= max(log_min_timesteps, 1) for a, b in zip(steps, steps[1:], strict=False))
-    assert all(b - a >= 3 for a, b in zip(episodes, episodes[1:], strict=False))
+    assert all(b - a >= max(log_min_timesteps, 1) for a, b in pairwise(steps))
+    assert all(b - a >= 3 for a, b in pairwise(episodes))
     if log_min_timesteps:
         assert len(rows) <= 4000 // log_min_timesteps
     else:  # SB3's cadence: at the first step at which 3 more episodes have ended

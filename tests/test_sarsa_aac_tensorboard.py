@@ -47,7 +47,8 @@ def test_custom_tb_log_name(tmp_path):
 
 
 def test_custom_info_keywords(tmp_path):
-    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), info_keywords=("distance",), tensorboard_log=str(tmp_path), log_min_timesteps=0)
+    env = ParameterizedTargetEnv()
+    model = SarsaAAC("RbfPolicy", env, info_keywords=("distance",), tensorboard_log=str(tmp_path), log_min_timesteps=0)
     model.learn(200, log_interval=1)
     events = EventAccumulator(str(tmp_path / "SarsaAAC_1"))
     events.Reload()
