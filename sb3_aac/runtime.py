@@ -326,8 +326,8 @@ def _positive_int(value: Any) -> bool:
     return _count(value) and value >= 1
 
 
-def _check_features(features: Any, head: Any, d: int, path: Any) -> None:
-    """The header's ``features`` section (``KeyError``/``TypeError`` for a missing or mistyped field)."""
+def _check_features_and_head(features: Any, head: Any, d: int, path: Any) -> None:
+    """The header's ``features`` and ``head`` sections (``KeyError``/``TypeError`` for a missing or mistyped field)."""
     if features["type"] == "rbf":
         if not _positive_int(features["n_rbf"]) or features["n_features"] != d * features["n_rbf"]:
             raise _fail(path, f"RBF features: n_rbf={features['n_rbf']!r}, n_features={features['n_features']!r}, {d} inputs")
@@ -345,6 +345,11 @@ def _check_features(features: Any, head: Any, d: int, path: Any) -> None:
             raise _fail(path, why)
     else:
         raise _fail(path, f"unknown feature type {features['type']!r} (known: 'rbf', 'scaled', 'tiles')")
+    if head["type"] == "tanh_mlp":
+        if not _positive_int(head["hidden_units"]):
+            raise _fail(path, f"hidden_units={head['hidden_units']!r}")
+    elif head["type"] != "linear":
+        raise _fail(path, f"unknown head type {head['type']!r} (known: 'linear', 'tanh_mlp')")
 
 
 def _check_header(header: Any, path: Any) -> None:
@@ -352,7 +357,8 @@ def _check_header(header: Any, path: Any) -> None:
     try:
         obs, action, approx = header["observation"], header["action"], header["approximators"]
         d, shape = obs["size"], obs["shape"]
-        if not (_positive_int(d) and isinstance(shape, list) and all(_positive_int(s) for s in shape) and math.prod(shape) == d):
+        shape_ok = isinstance(shape, list) and all(_positive_int(s) for s in shape) and math.prod(shape) == d
+        if not (_positive_int(d) and shape_ok):
             raise _fail(path, f"observation size {d} and shape {shape} disagree")
         k, start, layout, types = action["n_types"], action["type_start"], action["layout"], action["types"]
         if layout not in LAYOUTS:
@@ -375,12 +381,7 @@ def _check_header(header: Any, path: Any) -> None:
         if not (_positive_int(features["n_features"]) and _positive_int(approx["n_outputs"])):
             sizes = f"n_features={features['n_features']!r}, n_outputs={approx['n_outputs']!r}"
             raise _fail(path, f"{sizes}: both must be whole numbers >= 1")
-        _check_features(features, head, d, path)
-        if head["type"] == "tanh_mlp":
-            if not _positive_int(head["hidden_units"]):
-                raise _fail(path, f"hidden_units={head['hidden_units']!r}")
-        elif head["type"] != "linear":
-            raise _fail(path, f"unknown head type {head['type']!r} (known: 'linear', 'tanh_mlp')")
+        _check_features_and_head(features, head, d, path)
         outputs = approx["outputs"]
         expected = {"q": [0, k], "params": [k, k + offset], "value": k + offset}
         if approx["n_outputs"] != k + offset + 1 or outputs != expected:
@@ -420,7 +421,8 @@ def _parse_header(text: bytes, path: Any) -> dict[str, Any]:
     except RecursionError:
         raise _fail(path, "the header nests too deeply to be a policy header") from None
     if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
-        raise _fail(path, f"format is {header.get('format') if isinstance(header, dict) else None!r}, expected {FORMAT_NAME!r}")
+        found = header.get("format") if isinstance(header, dict) else None
+        raise _fail(path, f"format is {found!r}, expected {FORMAT_NAME!r}")
     version = header.get("version")
     if version not in SUPPORTED_VERSIONS:
         raise _fail(
@@ -454,7 +456,8 @@ def read_policy_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str,
             raise _fail(path, f"only {len(preamble)} bytes (truncated?)")
         magic, header_len = PREAMBLE.unpack(preamble)
         if magic != MAGIC:
-            raise _fail(path, f"it does not start with the magic bytes {MAGIC!r} (got {magic!r}); export one with sb3_aac.export_policy")
+            why = f"it does not start with the magic bytes {MAGIC!r} (got {magic!r}); export one with sb3_aac.export_policy"
+            raise _fail(path, why)
         if header_len > MAX_HEADER_BYTES or (PREAMBLE.size + header_len) % ALIGNMENT:
             raise _fail(path, f"header length {header_len}: at most {MAX_HEADER_BYTES} bytes, ending on a multiple of 8")
         head = preamble + _read_exactly(f, header_len, path, "header")
@@ -499,7 +502,8 @@ def _array_placements(header: dict[str, Any], path: Any) -> dict[str, tuple[int,
         if not (isinstance(stored_shape, list) and all(_count(s) for s in stored_shape)) or tuple(stored_shape) != shape:
             raise _fail(path, f"array {name!r} has shape {stored_shape!r}, the header's sizes need {shape}")
         size = 8 * math.prod(shape)
-        if not (_count(offset) and offset % ALIGNMENT == 0 and _count(nbytes) and nbytes == size and offset + size <= blob_size):
+        fits = _count(offset) and offset % ALIGNMENT == 0 and offset + size <= blob_size
+        if not (fits and _count(nbytes) and nbytes == size):
             raise _fail(path, f"array {name!r}: offset {offset!r} / nbytes {nbytes!r} do not fit the {blob_size}-byte blob")
         placements[name] = (offset, shape)
     return placements
@@ -657,7 +661,8 @@ class RuntimePolicy:
         k = self.n_types
         self._p_slice = slice(k, k + self.n_params)
         # Per type: its parameter bounds as Python floats.
-        self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in map(self.type_slice, range(k))]
+        slices = [self.type_slice(j) for j in range(k)]
+        self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in slices]
         self._kernel_args: tuple | None = None
         if self.tiles:
             _check_tile_arrays(arrays, self.obs_size, approx["features"]["n_features"], path)
@@ -767,7 +772,7 @@ class RuntimePolicy:
         # Unscale in Python floats: the same IEEE operations as unscale(), cheaper on a few values.
         values = []
         start = self.n_types + self.offsets[k]
-        for scaled, low, high in zip(out[start : start + self.dims[k]], *self._bounds_lists[k]):
+        for scaled, low, high in zip(out[start : start + self.dims[k]], *self._bounds_lists[k], strict=True):
             weight = 0.5 * scaled
             values.append(min(max(low * (0.5 - weight) + high * (0.5 + weight), low), high))
         return self.type_start + k, np.array(values, dtype=self.param_dtypes[k])
@@ -834,7 +839,9 @@ class RuntimePolicy:
         values = tuple(box(j) for j in range(self.n_types))
         return (self.type_start + k, values) if self.layout == "nested" else (self.type_start + k, *values)
 
-    def predict(self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True) -> tuple[Any, Any]:
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> tuple[Any, Any]:
         """
         The SB3 ``predict`` interface (greedy; ``deterministic`` is ignored), so evaluation code written for a
         model takes a ``RuntimePolicy`` too.

@@ -58,7 +58,7 @@ def test_update_equals_normalised_gradient_step(name):
     bank = make_bank(name)
     obs = np.random.default_rng(1).uniform(LOW, HIGH, (1, 3))
     kernel = bank.numpy_kernel()
-    out, cache = kernel.forward(obs)
+    _, cache = kernel.forward(obs)
     err = np.array([[0.5, 0.0, -1.0, 2.0]])
     lr = np.array([0.1, 0.2, 0.3, 0.4])
 
@@ -99,7 +99,7 @@ def test_zero_error_changes_nothing_and_outputs_are_independent():
     kernel = bank.numpy_kernel()
     before = {k: v.clone() for k, v in bank.state_dict().items()}
     obs = np.zeros((2, 3))
-    out, cache = kernel.forward(obs)
+    _, cache = kernel.forward(obs)
     err = np.zeros((2, 4))
     err[:, 1] = 1.0
     kernel.update(cache, err, np.ones(4))
@@ -131,7 +131,8 @@ def test_kernel_views_follow_load_state_dict_and_moves():
         other.weight.add_(1.0)
         other.rbf_widths.mul_(2.0)
     bank.load_state_dict(other.state_dict())
-    np.testing.assert_allclose(bank.numpy_kernel().forward(obs)[0], torch_reference(other.state_dict(), th.as_tensor(obs))[1].numpy())
+    reference = torch_reference(other.state_dict(), th.as_tensor(obs))[1].numpy()
+    np.testing.assert_allclose(bank.numpy_kernel().forward(obs)[0], reference)
     bank.to(th.float64)
     assert bank.numpy_kernel() is not kernel
     clone = copy.deepcopy(bank)
@@ -168,7 +169,7 @@ def test_rate_one_lands_identical_samples_on_target(n_rbf, n):
     obs = np.tile([[0.3, 1.2, -2.0]], (n, 1))
     out, cache = kernel.forward(obs)
     kernel.update(cache, np.tile([[1.0, -3.0]], (n, 1)), np.ones(2))
-    np.testing.assert_allclose(kernel.forward(obs[:1])[0], out[:1] + [[1.0, -3.0]], atol=1e-12)
+    np.testing.assert_allclose(kernel.forward(obs[:1])[0], out[:1] + np.array([[1.0, -3.0]]), atol=1e-12)
 
 
 def test_disjoint_samples_keep_their_own_weight_steps():

@@ -44,7 +44,8 @@ def observations(model: SarsaAAC, n: int = N_OBS, seed: int = 1) -> np.ndarray:
     space = model.observation_space
     span = space.high - space.low
     # Also 20% outside the bounds: predict does not clip observations, neither may the runtime.
-    return np.random.default_rng(seed).uniform(space.low - 0.2 * span, space.high + 0.2 * span, (n, *space.shape)).astype(np.float32)
+    low, high = space.low - 0.2 * span, space.high + 0.2 * span
+    return np.random.default_rng(seed).uniform(low, high, (n, *space.shape)).astype(np.float32)
 
 
 def flat(value) -> np.ndarray:
@@ -80,7 +81,8 @@ def test_same_decisions_as_predict(policy: str, layout: str, tmp_dir: Path) -> N
     if policy == "TilePolicy":
         model = randomised_model(policy, layout, tiles_per_input=5, n_tilings=3)
     else:
-        model = randomised_model(policy, layout, n_rbf=7 if policy != "MlpPolicy" else None, hidden_units=None if policy == "RbfPolicy" else 4)
+        n_rbf, hidden_units = 7 if policy != "MlpPolicy" else None, None if policy == "RbfPolicy" else 4
+        model = randomised_model(policy, layout, n_rbf=n_rbf, hidden_units=hidden_units)
     path = export_policy(model, tmp_dir / f"{policy}-{layout}")
     assert path.suffix == ".aacp"
     obs = observations(model)
@@ -201,13 +203,16 @@ def test_good_file_round_trips(good_file: Path) -> None:
     (header_len,) = struct.unpack_from("<Q", data, 8)
     assert (16 + header_len) % 8 == 0
     assert hashlib.sha256(data[:-32]).digest() == data[-32:]
-    assert set(arrays) == {"obs_low", "obs_high", "obs_mid", "obs_half", "param_low", "param_high", "rbf_centers", "rbf_widths", "weight1", "bias1", "weight2", "bias2"}
+    assert set(arrays) == {
+        *("obs_low", "obs_high", "obs_mid", "obs_half", "param_low", "param_high"),
+        *("rbf_centers", "rbf_widths", "weight1", "bias1", "weight2", "bias2"),
+    }
 
 
 @pytest.mark.parametrize("cut", [0, 10, 100, -33, -1])
 def test_truncated(good_file: Path, tmp_dir: Path, cut: int) -> None:
     data = good_file.read_bytes()
-    with pytest.raises(ValueError, match="truncated|checksum"):
+    with pytest.raises(ValueError, match=r"truncated|checksum"):
         load_bytes(tmp_dir, data[:cut])
 
 
@@ -215,7 +220,7 @@ def test_truncated(good_file: Path, tmp_dir: Path, cut: int) -> None:
 def test_altered_byte(good_file: Path, tmp_dir: Path, where: int) -> None:
     data = bytearray(good_file.read_bytes())
     data[where] ^= 0x01
-    with pytest.raises(ValueError, match="checksum|magic"):
+    with pytest.raises(ValueError, match=r"checksum|magic"):
         load_bytes(tmp_dir, bytes(data))
 
 
@@ -336,7 +341,7 @@ def test_endless_stream_is_read_header_first(tmp_dir: Path) -> None:
     for start, message in [(b"", "magic"), (PREAMBLE.pack(MAGIC, 2**40), "header length")]:
         stream = Endless(start)
         try:
-            runtime.open = lambda *args, **kwargs: contextlib.nullcontext(stream)  # type: ignore[attr-defined]
+            runtime.open = lambda *args, stream=stream, **kwargs: contextlib.nullcontext(stream)  # type: ignore[attr-defined]
             with pytest.raises(ValueError, match=message):
                 read_policy_file(tmp_dir / "good.aacp")
         finally:
