@@ -2,7 +2,7 @@
 Greedy SarsaAAC decisions from an exported policy file, with numpy alone.
 
 :func:`sb3_aac.export_policy` writes a trained policy as plain arrays and a JSON description (format
-``sb3-aac-policy`` version 1, see ``docs/export-format.md``); :class:`RuntimePolicy` reads it back and acts::
+``sb3-aac-policy`` version 2, see ``docs/export-format.md``); :class:`RuntimePolicy` reads it back and acts::
 
     from sb3_aac.runtime import RuntimePolicy
 
@@ -33,8 +33,8 @@ from typing import Any
 import numpy as np
 
 FORMAT_NAME = "sb3-aac-policy"
-FORMAT_VERSION = 1
-SUPPORTED_VERSIONS = (1,)
+FORMAT_VERSION = 2  # 2: RBF features may name a window (features.rbf_window)
+SUPPORTED_VERSIONS = (1, 2)
 MAGIC = b"SB3AACP\x00"  # 8 bytes
 PREAMBLE = struct.Struct("<8sQ")  # magic, header length (bytes)
 DIGEST_SIZE = 32  # the file ends with the SHA-256 of everything before it
@@ -272,7 +272,7 @@ class TileForward:
 
 
 def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
-    """The arrays a version-1 file must hold, with their shapes, given its (checked) header."""
+    """The arrays a version-1 or -2 file must hold, with their shapes, given its (checked) header."""
     d = header["observation"]["size"]
     n_params = header["action"]["n_params"]
     approx = header["approximators"]
@@ -331,7 +331,7 @@ def _check_features_and_head(features: Any, head: Any, d: int, path: Any) -> Non
     if features["type"] == "rbf":
         if not _positive_int(features["n_rbf"]) or features["n_features"] != d * features["n_rbf"]:
             raise _fail(path, f"RBF features: n_rbf={features['n_rbf']!r}, n_features={features['n_features']!r}, {d} inputs")
-        try:
+        try:  # version 1 has no window: dense
             check_rbf_window(features.get("rbf_window"))
         except ValueError as error:
             raise _fail(path, str(error)) from None
@@ -353,7 +353,7 @@ def _check_features_and_head(features: Any, head: Any, d: int, path: Any) -> Non
 
 
 def _check_header(header: Any, path: Any) -> None:
-    """Structure and consistency of a version-1 header (everything but the arrays)."""
+    """Structure and consistency of a version-1 or -2 header (everything but the arrays)."""
     try:
         obs, action, approx = header["observation"], header["action"], header["approximators"]
         d, shape = obs["size"], obs["shape"]
@@ -443,7 +443,7 @@ def read_policy_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str,
     file is refused after a few bytes.
 
     :return: the JSON header and the arrays (read-only float64 views of one buffer)
-    :raises ValueError: for a file that is not a complete, unaltered version-1 policy file
+    :raises ValueError: for a file that is not a complete, unaltered policy file of a supported version
     :raises FileNotFoundError: if there is no such file
     """
     if not os.path.exists(path):
@@ -498,7 +498,7 @@ def _array_placements(header: dict[str, Any], path: Any) -> dict[str, tuple[int,
         except (KeyError, TypeError) as error:
             raise _fail(path, f"array {name!r}: malformed entry {entry!r}") from error
         if dtype != ARRAY_DTYPE:
-            raise _fail(path, f"array {name!r} has dtype {dtype!r}, version 1 stores every array as {ARRAY_DTYPE!r}")
+            raise _fail(path, f"array {name!r} has dtype {dtype!r}, versions 1 and 2 store every array as {ARRAY_DTYPE!r}")
         if not (isinstance(stored_shape, list) and all(_count(s) for s in stored_shape)) or tuple(stored_shape) != shape:
             raise _fail(path, f"array {name!r} has shape {stored_shape!r}, the header's sizes need {shape}")
         size = 8 * math.prod(shape)

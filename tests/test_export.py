@@ -197,7 +197,7 @@ def load_bytes(tmp_dir: Path, data: bytes) -> RuntimePolicy:
 
 def test_good_file_round_trips(good_file: Path) -> None:
     header, arrays = read_policy_file(good_file)
-    assert header["format"] == "sb3-aac-policy" and header["version"] == 1
+    assert header["format"] == "sb3-aac-policy" and header["version"] == 2
     data = good_file.read_bytes()
     assert data[:8] == b"SB3AACP\x00"
     (header_len,) = struct.unpack_from("<Q", data, 8)
@@ -234,8 +234,8 @@ def test_trailing_garbage_and_pickle(good_file: Path, tmp_dir: Path) -> None:
 
 
 def test_unknown_version_and_format(good_file: Path, tmp_dir: Path) -> None:
-    with pytest.raises(ValueError, match="unknown format version 2"):
-        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(version=2)))
+    with pytest.raises(ValueError, match="unknown format version 3"):
+        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(version=3)))
     with pytest.raises(ValueError, match="format"):
         load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(format="other")))
 
@@ -439,3 +439,13 @@ def test_rbf_window_header_is_checked(good_file: Path, tmp_dir: Path) -> None:
 
     with pytest.raises(ValueError, match="rbf_window"):
         load_bytes(tmp_dir, rewrite(good_file, bad_window))
+
+
+def test_version_1_files_read_as_dense_rbfs(good_file: Path, tmp_dir: Path) -> None:
+    def version_1(h):
+        h["version"] = 1
+        del h["approximators"]["features"]["rbf_window"]
+
+    (tmp_dir / "v1.aacp").write_bytes(rewrite(good_file, version_1))
+    old, new = RuntimePolicy.load(tmp_dir / "v1.aacp"), RuntimePolicy.load(good_file)
+    assert old._bank.window_z2 == np.inf and new._bank.window_z2 == 12.5
