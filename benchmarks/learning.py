@@ -45,7 +45,7 @@ POLICIES: dict[str, tuple[str, dict[str, Any]]] = {
 
 def dribble_env(profile: str) -> Callable[[int], VecEnv]:
     def make(seed: int) -> VecEnv:
-        from robocup_dribble.env import DribbleVecEnv
+        from robocup_dribble import DribbleVecEnv
 
         env = DribbleVecEnv(16, profile=profile)
         env.seed(seed)
