@@ -175,7 +175,7 @@ class BankForward:
         :param out: a float64 buffer of shape ``(..., *feature_a.shape)`` to compute in (saves allocations)
         """
         if self.window_size is not None and obs.size >= WINDOW_MIN_ROWS * len(self.feature_b):
-            return self._window_features(obs, out)
+            return self._window_features(obs, out, self.window_size)
         z = np.multiply(obs[..., None] if self.rbf else obs, self.feature_a, out=out)
         np.subtract(z, self.feature_b, out=z)
         if not self.rbf:
@@ -188,11 +188,10 @@ class BankForward:
             np.multiply(z, inside, out=z)  # exactly 0 outside the window (a mask costs less than skipping exps)
         return z.reshape(*obs.shape[:-1], -1)
 
-    def _window_features(self, obs: np.ndarray, out: np.ndarray | None) -> np.ndarray:
-        """:meth:`features` evaluating only ``window_size`` evenly spaced centres per input (same values)."""
+    def _window_features(self, obs: np.ndarray, out: np.ndarray | None, size: int) -> np.ndarray:
+        """:meth:`features` evaluating only ``size`` evenly spaced centres per input (same values)."""
         a = self.feature_a[:, 0]
         d, m = self.feature_a.shape
-        size = self.window_size
         rows = obs.reshape(-1, d)
         first = np.floor((rows * a - self._first_b - math.sqrt(self.window_z2)) / self._b_step) - 1.0
         np.clip(first, 0, m - size, out=first)
