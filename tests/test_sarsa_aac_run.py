@@ -141,14 +141,16 @@ def test_exploration_by_episodes():
         )
         seen: list[tuple[int, float]] = []
 
-        def record(_locals, _globals, model=model, seen=seen) -> None:
+        def record(_locals, _globals, model=model, seen=seen) -> bool:
             seen.append((model._episode_num, model.exploration_rate))
+            return True
 
         model.learn(budget, callback=record)
         rates[budget] = seen
         for episodes, rate in seen:
             assert rate == pytest.approx(0.8 - 0.7 * min(episodes / 40, 1.0))
-    assert rates[3000][: len(rates[300])] == rates[300]  # the same schedule, not stretched by the budget
+    assert len(rates[300]) == 300 and rates[3000][-1][1] == pytest.approx(0.1)
+    assert rates[3000][:300] == rates[300]  # the same schedule, not stretched by the budget
 
 
 def test_predict_explores_when_not_deterministic():
