@@ -3,7 +3,7 @@ Learning targets of SarsaAAC (issue 8): train each (task, policy) on several see
 
     PYTHONPATH=.:envs python -m benchmarks.learning --seeds 3
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-mlp2,nav-tile --seeds 5
-    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-rbf10 --set exploration_episodes=3000
+    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
 
 Scores: the mean dribbled distance in metres over 500 greedy episodes on fresh players (the dribbling envs), the
 mean return over 200 greedy episodes (Platform-v0, the toy env), the greedy success rate over 500 episodes (the

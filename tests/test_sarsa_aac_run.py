@@ -127,32 +127,6 @@ def test_exploration_schedules():
         np.testing.assert_array_equal(a, b)
 
 
-def test_exploration_by_episodes():
-    """With exploration_episodes the rates follow the finished episodes, whatever the budget."""
-    rates = {}
-    for budget in (300, 3000):
-        model = SarsaAAC(
-            "RbfPolicy",
-            ParameterizedTargetEnv(),
-            exploration_episodes=40,
-            exploration_initial_eps=0.8,
-            exploration_final_eps=0.1,
-            seed=0,
-        )
-        seen: list[tuple[int, float]] = []
-
-        def record(_locals, _globals, model=model, seen=seen) -> bool:
-            seen.append((model._episode_num, model.exploration_rate))
-            return True
-
-        model.learn(budget, callback=record)
-        rates[budget] = seen
-        for episodes, rate in seen:
-            assert rate == pytest.approx(0.8 - 0.7 * min(episodes / 40, 1.0))
-    assert len(rates[300]) == 300 and rates[3000][-1][1] == pytest.approx(0.1)
-    assert rates[3000][:300] == rates[300]  # the same schedule, not stretched by the budget
-
-
 def test_predict_explores_when_not_deterministic():
     model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), exploration_initial_eps=1.0, seed=0)
     obs = np.array([0.3, -0.2], np.float32)
@@ -168,8 +142,6 @@ def test_predict_explores_when_not_deterministic():
         (dict(type_exploration="softmax"), "Unknown type_exploration 'softmax'"),
         (dict(gamma=1.5), "gamma must be in"),
         (dict(exploration_fraction=0.0), "exploration_fraction must be in"),
-        (dict(exploration_episodes=0), "exploration_episodes must be a whole number >= 1"),
-        (dict(exploration_episodes=2.5), "exploration_episodes must be a whole number >= 1"),
         (dict(param_noise_initial=-0.1), "param_noise_initial must be a finite number >= 0"),
         (dict(exploration_initial_eps=2.0), "epsilon-greedy exploration rates must be <= 1"),
     ],

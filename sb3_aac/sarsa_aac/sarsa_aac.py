@@ -123,9 +123,6 @@ class SarsaAAC(BaseAlgorithm):
         the exploration schedule, in units of ``return_scale``)
     :param exploration_fraction: Fraction of the training period over which the exploration rate and the
         parameter noise decay
-    :param exploration_episodes: If given, the exploration rate and the parameter noise decay linearly over this
-        many finished episodes (over all lanes, as ``time/episodes`` counts them) instead of over
-        ``exploration_fraction`` of the budget, so the schedule does not depend on the budget
     :param exploration_initial_eps: Initial epsilon (or temperature for Boltzmann exploration)
     :param exploration_final_eps: Final epsilon (or temperature)
     :param param_noise_initial: Initial standard deviation of the Gaussian noise on the scaled parameters
@@ -166,7 +163,6 @@ class SarsaAAC(BaseAlgorithm):
         gamma: float = 0.9,
         type_exploration: str = "epsilon_greedy",
         exploration_fraction: float = 0.5,
-        exploration_episodes: int | None = None,
         exploration_initial_eps: float = 0.3,
         exploration_final_eps: float = 0.05,
         param_noise_initial: float = 0.3,
@@ -205,7 +201,6 @@ class SarsaAAC(BaseAlgorithm):
         self.gamma = gamma
         self.type_exploration = type_exploration
         self.exploration_fraction = exploration_fraction
-        self.exploration_episodes = exploration_episodes
         self.exploration_initial_eps = exploration_initial_eps
         self.exploration_final_eps = exploration_final_eps
         self.param_noise_initial = param_noise_initial
@@ -237,9 +232,6 @@ class SarsaAAC(BaseAlgorithm):
             raise ValueError(f"gamma must be in [0, 1], got {self.gamma}")
         if not 0 < self.exploration_fraction <= 1:
             raise ValueError(f"exploration_fraction must be in (0, 1], got {self.exploration_fraction}")
-        episodes = self.exploration_episodes
-        if episodes is not None and not (isinstance(episodes, (int, np.integer)) and episodes >= 1):
-            raise ValueError(f"exploration_episodes must be a whole number >= 1 or None, got {episodes!r}")
         for name in ("exploration_initial_eps", "exploration_final_eps", "param_noise_initial", "param_noise_final"):
             if not (isinstance(getattr(self, name), (int, float, np.floating)) and 0 <= getattr(self, name) < math.inf):
                 raise ValueError(f"{name} must be a finite number >= 0, got {getattr(self, name)!r}")
@@ -251,7 +243,7 @@ class SarsaAAC(BaseAlgorithm):
         self._setup_lr_schedule()
         self.q_lr_schedule = FloatSchedule(self.q_learning_rate)
         self.param_lr_schedule = FloatSchedule(self.param_learning_rate)
-        fraction = self.exploration_fraction if self.exploration_episodes is None else 1.0
+        fraction = self.exploration_fraction
         self.exploration_schedule = LinearSchedule(self.exploration_initial_eps, self.exploration_final_eps, fraction)
         self.param_noise_schedule = LinearSchedule(self.param_noise_initial, self.param_noise_final, fraction)
         self.exploration_rate = self.exploration_schedule(self._current_progress_remaining)
@@ -426,18 +418,11 @@ class SarsaAAC(BaseAlgorithm):
             infos[i] = info
         return step.observations, step.rewards, dones, infos
 
-    def _update_exploration(self) -> None:
-        """Evaluate the exploration schedules: at the training progress, or at the episodes so far."""
-        progress = self._current_progress_remaining
-        if self.exploration_episodes is not None:
-            progress = max(1.0 - self._episode_num / self.exploration_episodes, 0.0)
-        self.exploration_rate = self.exploration_schedule(progress)
-        self.param_noise = self.param_noise_schedule(progress)
-
     def _update_schedules(self) -> None:
         """Evaluate the exploration and learning-rate schedules at the current progress."""
         progress = self._schedule_progress = self._current_progress_remaining
-        self._update_exploration()
+        self.exploration_rate = self.exploration_schedule(progress)
+        self.param_noise = self.param_noise_schedule(progress)
         policy, lr = self.policy, self._lr
         lr[policy.q_slice] = self.q_lr_schedule(progress)
         lr[policy.param_slice] = self.param_lr_schedule(progress)
@@ -617,8 +602,6 @@ class SarsaAAC(BaseAlgorithm):
                 if key in infos[i]:
                     buffer.append(float(infos[i][key]))
         self._episode_num += int(dones.sum())
-        if self.exploration_episodes is not None:
-            self._update_exploration()
         episodes, timesteps = self._last_dump
         if (
             log_interval is not None
