@@ -8,12 +8,16 @@ through :class:`sb3_aac.DiscretizeParameterizedAction` (a Discrete grid). A last
 :class:`robocup_dribble.DribbleVecEnv` with the same number of lanes, which is how the dribbling env is meant to be
 trained.
 
-A last line gives SarsaAAC's own cost on the array path (:mod:`sb3_aac.common.array_env`) for ``--array-lanes``
-lanes: a :class:`NullArrayEnv` with the dribbling env's spaces whose ``step_arrays`` costs almost nothing, so the
-figure is the algorithm's ceiling, which an array env's own cost then lowers.
+Then SarsaAAC on ``DribbleVecEnv(--lanes)`` (array path) with 10, 30 and 50 RBFs per input (``--n-rbf``): the
+cost growth with the number of features; and SarsaAAC's own cost on the array path (:mod:`sb3_aac.common.array_env`)
+for ``--lanes`` lanes: a :class:`NullArrayEnv` with the dribbling env's spaces whose ``step_arrays`` costs almost
+nothing, so the figure is the algorithm's ceiling, which an array env's own cost then lowers.
 
-Usage: ``python benchmarks/algo_speed.py [--steps 20000] [--n-envs 1 4 16] [--policy RbfPolicy] [--torch-threads 1]
-[--array-lanes 256]``
+Targets (issue 12): RbfPolicy (10 per input) >= 300k env steps/s on ``DribbleVecEnv(256)``; on 16 lanes SarsaAAC on
+``DribbleVecEnv`` >= 20x PPO and >= 3x DQN (the "SarsaAAC+DribbleVecEnv" column's ratios).
+
+Usage: ``python benchmarks/algo_speed.py [--steps 20000] [--n-envs 16] [--policy RbfPolicy] [--torch-threads 1]
+[--lanes 256] [--n-rbf 10 30 50]``
 
 Single runs on a shared machine: repeat them, and report the load average next to the numbers.
 """
@@ -88,16 +92,16 @@ class NullArrayEnv(VecEnv):
         pass
 
 
-def build(algo: str, env_id: str, n_envs: int, policy: str):
+def build(algo: str, env_id: str, n_envs: int, policy: str, policy_kwargs: dict | None = None):
     if algo == "SarsaAAC":
-        return SarsaAAC(policy, make_vec_env(env_id, n_envs=n_envs, seed=0), seed=0)
+        return SarsaAAC(policy, make_vec_env(env_id, n_envs=n_envs, seed=0), seed=0, policy_kwargs=policy_kwargs)
     if algo == "SarsaAAC+NullArrayEnv":
         spaces_env = gym.make(env_id)
         env = NullArrayEnv(n_envs, spaces_env.observation_space, spaces_env.action_space)
-        return SarsaAAC(policy, env, seed=0, info_keywords=())
+        return SarsaAAC(policy, env, seed=0, info_keywords=(), policy_kwargs=policy_kwargs)
     if algo == "SarsaAAC+DribbleVecEnv":
         profile = gym.spec(env_id).kwargs["profile"]
-        return SarsaAAC(policy, robocup_dribble.DribbleVecEnv(n_envs, profile=profile), seed=0)
+        return SarsaAAC(policy, robocup_dribble.DribbleVecEnv(n_envs, profile=profile), seed=0, policy_kwargs=policy_kwargs)
     if algo == "PPO":
         # Defaults, with the rollout kept at 2048 transitions whatever the number of envs.
         env = make_vec_env(env_id, n_envs=n_envs, seed=0, wrapper_class=FlattenParameterizedAction)
@@ -106,8 +110,8 @@ def build(algo: str, env_id: str, n_envs: int, policy: str):
     return DQN("MlpPolicy", env, buffer_size=100_000, seed=0, device="cpu")
 
 
-def steps_per_second(algo: str, env_id: str, n_envs: int, steps: int, policy: str) -> float:
-    model = build(algo, env_id, n_envs, policy)
+def steps_per_second(algo: str, env_id: str, n_envs: int, steps: int, policy: str, policy_kwargs: dict | None = None) -> float:
+    model = build(algo, env_id, n_envs, policy, policy_kwargs)
     model.learn(min(1000, steps))  # warm-up: compiled kernels, first allocations
     start = time.perf_counter()
     model.learn(steps, reset_num_timesteps=False)
@@ -127,9 +131,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--env", default="RoboCupDribblePaper-v0", help="a registered dribbling env id")
     parser.add_argument("--steps", type=int, default=20_000, help="env steps per training measurement")
-    parser.add_argument("--n-envs", type=int, nargs="+", default=[1, 4, 16])
+    parser.add_argument("--n-envs", type=int, nargs="+", default=[16])
     parser.add_argument("--policy", default="RbfPolicy", help="SarsaAAC policy")
-    parser.add_argument("--array-lanes", type=int, default=256, help="lanes of the algorithm-only array-path measurement")
+    parser.add_argument("--lanes", type=int, default=256, help="lanes of the DribbleVecEnv and NullArrayEnv measurements")
+    parser.add_argument("--n-rbf", type=int, nargs="+", default=[10, 30, 50], help="RBFs per input for the cost growth")
     parser.add_argument(
         "--torch-threads", type=int, default=1, help="torch threads for PPO/DQN (1 is fastest at these sizes on a busy box)"
     )
@@ -137,19 +142,30 @@ def main() -> None:
     th.set_num_threads(args.torch_threads)
     print(f"{args.env}; torch threads {th.get_num_threads()}; {args.steps} steps per measurement; SarsaAAC {args.policy}; "
           f"load average {os.getloadavg()[0]:.1f}")
+    print("SarsaAAC: DummyVecEnv (SB3 step, tuples) and DribbleVecEnv (array path); PPO: DummyVecEnv of "
+          "FlattenParameterizedAction; DQN: DummyVecEnv of DiscretizeParameterizedAction (both SB3 step)")
     algos = ("SarsaAAC", "PPO", "DQN", "SarsaAAC+DribbleVecEnv")
     print(f"{'n_envs':>6} {'SarsaAAC':>10} {'PPO':>8} {'DQN':>8} {'vs PPO':>7} {'vs DQN':>7} {'SarsaAAC+DribbleVecEnv':>23}"
           "   (env steps/s)")
     for n_envs in args.n_envs:
         rates = {algo: steps_per_second(algo, args.env, n_envs, args.steps, args.policy) for algo in algos}
+        array_rate = rates["SarsaAAC+DribbleVecEnv"]
         print(
             f"{n_envs:>6} {rates['SarsaAAC']:>10.0f} {rates['PPO']:>8.0f} {rates['DQN']:>8.0f} "
             f"{rates['SarsaAAC'] / rates['PPO']:>6.1f}x {rates['SarsaAAC'] / rates['DQN']:>6.1f}x "
-            f"{rates['SarsaAAC+DribbleVecEnv']:>23.0f} ({rates['SarsaAAC+DribbleVecEnv'] / rates['PPO']:.1f}x PPO)",
+            f"{array_rate:>23.0f} ({array_rate / rates['PPO']:.1f}x PPO, {array_rate / rates['DQN']:.1f}x DQN)",
             flush=True,
         )
-    lanes = args.array_lanes
-    algorithm_only = steps_per_second("SarsaAAC+NullArrayEnv", args.env, lanes, max(args.steps, 50 * lanes), args.policy)
+    lanes = args.lanes
+    steps = max(args.steps, 200 * lanes)
+    print(f"\nSarsaAAC {args.policy} on DribbleVecEnv({lanes}), array path: cost growth with RBFs per input")
+    base = None
+    for n_rbf in args.n_rbf:
+        rate = steps_per_second("SarsaAAC+DribbleVecEnv", args.env, lanes, steps, args.policy, {"n_rbf": n_rbf})
+        base = base or rate
+        relative = f"{base / rate:.2f}x the cost at {args.n_rbf[0]}"
+        print(f"  {n_rbf:>3} RBFs/input: {rate:>9.0f} env steps/s  ({relative})", flush=True)
+    algorithm_only = steps_per_second("SarsaAAC+NullArrayEnv", args.env, lanes, steps, args.policy)
     print(f"SarsaAAC {args.policy} alone on the array path (NullArrayEnv, {lanes} lanes): {algorithm_only:.0f} env steps/s")
     obs = gym.make(args.env).reset(seed=0)[0]
     sarsa, dqn = build("SarsaAAC", args.env, 1, args.policy), build("DQN", args.env, 1, args.policy)

@@ -3,6 +3,7 @@ Learning targets of SarsaAAC (issue 8): train each (task, policy) on several see
 
     PYTHONPATH=.:envs python -m benchmarks.learning --seeds 3
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-mlp2,nav-tile --seeds 5
+    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
 
 Scores: the mean dribbled distance in metres over 500 greedy episodes on fresh players (the dribbling envs), the
 mean return over 200 greedy episodes (Platform-v0, the toy env), the greedy success rate over 500 episodes (the
@@ -13,6 +14,7 @@ training episodes and env steps, and the training speed. Runs are single-threade
 from __future__ import annotations
 
 import argparse
+import ast
 import os
 import time
 from collections.abc import Callable
@@ -45,7 +47,7 @@ POLICIES: dict[str, tuple[str, dict[str, Any]]] = {
 
 def dribble_env(profile: str) -> Callable[[int], VecEnv]:
     def make(seed: int) -> VecEnv:
-        from robocup_dribble.env import DribbleVecEnv
+        from robocup_dribble import DribbleVecEnv
 
         env = DribbleVecEnv(16, profile=profile)
         env.seed(seed)
@@ -112,10 +114,13 @@ def iqm(values: list[float]) -> float:
     return float(stats.trim_mean(values, 0.25))
 
 
-def run(task: str, policy_name: str, seeds: list[int], steps: int | None, rate: float | None) -> None:
+def run(
+    task: str, policy_name: str, seeds: list[int], steps: int | None, rate: float | None, settings: dict[str, Any]
+) -> None:
     make_env, budget, kwargs, score = TASKS[task]
     if rate is not None:
         kwargs = {**kwargs, "learning_rate": rate, "q_learning_rate": rate, "param_learning_rate": rate}
+    kwargs = {**kwargs, **settings}
     policy, policy_kwargs = POLICIES[policy_name]
     budget = steps or budget
     scores, episodes, speeds = [], [], []
@@ -126,8 +131,9 @@ def run(task: str, policy_name: str, seeds: list[int], steps: int | None, rate: 
         speeds.append(budget / (time.perf_counter() - start))
         episodes.append(model._episode_num)
         scores.append(score(model))
+    extra = "".join(f" {key}={value}" for key, value in settings.items())
     print(
-        f"{task:9s} {policy_name:8s} rate={rate or 'default'} steps={budget:>7d} episodes~{int(np.mean(episodes)):>6d} "
+        f"{task:9s} {policy_name:8s} rate={rate or 'default'}{extra} steps={budget:>7d} episodes~{int(np.mean(episodes)):>6d} "
         f"scores={[round(s, 3) for s in scores]} mean={np.mean(scores):.3f} iqm={iqm(scores):.3f} "
         f"train={np.mean(speeds) / 1e3:.0f}k steps/s",
         flush=True,
@@ -146,13 +152,17 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--steps", type=int, default=None, help="override every task's training steps")
     parser.add_argument("--rate", type=float, default=None, help="set the three learning rates (default: SarsaAAC's)")
+    parser.add_argument(
+        "--set", nargs="*", default=[], metavar="KEY=VALUE", help="SarsaAAC keyword arguments (Python literals)"
+    )
     args = parser.parse_args()
     th.set_num_threads(1)
+    settings = {key: ast.literal_eval(value) for key, value in (item.split("=", 1) for item in args.set)}
     for pair in args.only.split(","):
         task, policy_name = pair.split("-")
         if task not in TASKS or policy_name not in POLICIES:
             raise SystemExit(f"unknown pair {pair!r}: tasks {list(TASKS)}, policies {list(POLICIES)}")
-        run(task, policy_name, list(range(args.seeds)), args.steps, args.rate)
+        run(task, policy_name, list(range(args.seeds)), args.steps, args.rate, settings)
 
 
 if __name__ == "__main__":

@@ -103,9 +103,9 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
             "n_outputs": k + n_params + 1,
             "outputs": {"q": [0, k], "params": [k, k + n_params], "value": k + n_params},
             "features": _features_header(policy),
-            "head": {"type": "linear"}
-            if bank.hidden_units is None
-            else {"type": "tanh_mlp", "hidden_units": bank.hidden_units},
+            "head": (
+                {"type": "linear"} if bank.hidden_units is None else {"type": "tanh_mlp", "hidden_units": bank.hidden_units}
+            ),
         },
         "metadata": dict(metadata or {}),
     }
@@ -125,7 +125,14 @@ def _features_header(policy: Any) -> dict[str, Any]:
         }
     if bank.n_rbf is None:
         return {"type": "scaled", "n_features": bank.n_features}
-    return {"type": "rbf", "n_rbf": bank.n_rbf, "rbf_width": float(policy.rbf_width), "n_features": bank.n_features}
+    window = None if bank.rbf_window is None else float(bank.rbf_window)
+    return {
+        "type": "rbf",
+        "n_rbf": bank.n_rbf,
+        "rbf_width": float(policy.rbf_width),
+        "rbf_window": window,
+        "n_features": bank.n_features,
+    }
 
 
 def encode_policy_file(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> bytes:
@@ -167,9 +174,8 @@ def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, 
         meta.setdefault("num_timesteps", int(num_timesteps))
     header = policy_header(policy, meta)
     arrays = policy_arrays(policy)
-    assert {name: a.shape for name, a in arrays.items()} == expected_array_shapes({**header, "arrays": {}}), (
-        "writer/reader disagree"
-    )
+    shapes = {name: a.shape for name, a in arrays.items()}
+    assert shapes == expected_array_shapes({**header, "arrays": {}}), "writer/reader disagree"
     try:
         data = encode_policy_file(header, arrays)
     except ValueError as error:  # allow_nan=False: a NaN in the metadata

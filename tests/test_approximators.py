@@ -58,7 +58,7 @@ def test_update_equals_normalised_gradient_step(name):
     bank = make_bank(name)
     obs = np.random.default_rng(1).uniform(LOW, HIGH, (1, 3))
     kernel = bank.numpy_kernel()
-    out, cache = kernel.forward(obs)
+    _, cache = kernel.forward(obs)
     err = np.array([[0.5, 0.0, -1.0, 2.0]])
     lr = np.array([0.1, 0.2, 0.3, 0.4])
 
@@ -99,7 +99,7 @@ def test_zero_error_changes_nothing_and_outputs_are_independent():
     kernel = bank.numpy_kernel()
     before = {k: v.clone() for k, v in bank.state_dict().items()}
     obs = np.zeros((2, 3))
-    out, cache = kernel.forward(obs)
+    _, cache = kernel.forward(obs)
     err = np.zeros((2, 4))
     err[:, 1] = 1.0
     kernel.update(cache, err, np.ones(4))
@@ -131,7 +131,8 @@ def test_kernel_views_follow_load_state_dict_and_moves():
         other.weight.add_(1.0)
         other.rbf_widths.mul_(2.0)
     bank.load_state_dict(other.state_dict())
-    np.testing.assert_allclose(bank.numpy_kernel().forward(obs)[0], torch_reference(other.state_dict(), th.as_tensor(obs))[1].numpy())
+    reference = torch_reference(other.state_dict(), th.as_tensor(obs))[1].numpy()
+    np.testing.assert_allclose(bank.numpy_kernel().forward(obs)[0], reference)
     bank.to(th.float64)
     assert bank.numpy_kernel() is not kernel
     clone = copy.deepcopy(bank)
@@ -168,7 +169,7 @@ def test_rate_one_lands_identical_samples_on_target(n_rbf, n):
     obs = np.tile([[0.3, 1.2, -2.0]], (n, 1))
     out, cache = kernel.forward(obs)
     kernel.update(cache, np.tile([[1.0, -3.0]], (n, 1)), np.ones(2))
-    np.testing.assert_allclose(kernel.forward(obs[:1])[0], out[:1] + [[1.0, -3.0]], atol=1e-12)
+    np.testing.assert_allclose(kernel.forward(obs[:1])[0], out[:1] + np.array([[1.0, -3.0]]), atol=1e-12)
 
 
 def test_disjoint_samples_keep_their_own_weight_steps():
@@ -179,3 +180,32 @@ def test_disjoint_samples_keep_their_own_weight_steps():
     w = 1 / (1 + (x * x).sum(1))
     np.testing.assert_allclose(weights, w, rtol=1e-6)
     np.testing.assert_allclose(bias, w / (w.sum() / (1 - (w * (x * x).sum(1)).mean())))
+
+
+@pytest.mark.parametrize("n_rbf", [7, 30, 50, 80])
+@pytest.mark.parametrize("rbf_window", [1.5, 5.0])
+def test_rbf_window_is_the_masked_dense_features(n_rbf: int, rbf_window: float) -> None:
+    """Windowed features equal the dense ones where z * z <= r**2 / 2 and are exactly 0 elsewhere, bit for bit,
+    for a large batch (the gathered window), a small one (dense, then the mask) and one observation."""
+    from sb3_aac.runtime import WINDOW_MIN_ROWS, BankForward
+
+    rng = np.random.default_rng(n_rbf)
+    low, high = rng.uniform(-5, 0, 6), rng.uniform(1, 5, 6)
+    bank = ApproximatorBank(low, high, 3, n_rbf=n_rbf, rbf_width=0.7, rbf_window=rbf_window)
+    windowed, dense = bank.numpy_kernel(), BankForward(**bank.arrays())
+    obs = rng.uniform(low - 0.5 * (high - low), high + 0.5 * (high - low), (2 * WINDOW_MIN_ROWS, 6))
+    z = obs[..., None] * dense.feature_a - dense.feature_b
+    expected = np.where(z * z <= rbf_window**2 / 2, dense.features(obs).reshape(z.shape), 0.0).reshape(len(obs), -1)
+    assert 0 < (expected == 0).mean() < 1
+    np.testing.assert_array_equal(windowed.features(obs), expected)
+    np.testing.assert_array_equal(windowed.features(obs[:3]), expected[:3])
+    np.testing.assert_array_equal(windowed.features(obs[0], out=np.empty(dense.feature_a.shape)), expected[0])
+    # The documented bound: each dropped feature is below exp(-r**2 / 2).
+    dropped = dense.features(obs) - expected
+    assert dropped.max() <= np.exp(-(rbf_window**2) / 2)
+
+
+def test_rbf_window_validation() -> None:
+    for bad in (0, -1.0, float("inf"), float("nan"), "5", True):
+        with pytest.raises(ValueError, match="rbf_window"):
+            ApproximatorBank(np.zeros(2), np.ones(2), 3, n_rbf=5, rbf_window=bad)

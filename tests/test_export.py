@@ -44,11 +44,8 @@ def observations(model: SarsaAAC, n: int = N_OBS, seed: int = 1) -> np.ndarray:
     space = model.observation_space
     span = space.high - space.low
     # Also 20% outside the bounds: predict does not clip observations, neither may the runtime.
-    return (
-        np.random.default_rng(seed)
-        .uniform(space.low - 0.2 * span, space.high + 0.2 * span, (n, *space.shape))
-        .astype(np.float32)
-    )
+    low, high = space.low - 0.2 * span, space.high + 0.2 * span
+    return np.random.default_rng(seed).uniform(low, high, (n, *space.shape)).astype(np.float32)
 
 
 def flat(value) -> np.ndarray:
@@ -84,9 +81,8 @@ def test_same_decisions_as_predict(policy: str, layout: str, tmp_dir: Path) -> N
     if policy == "TilePolicy":
         model = randomised_model(policy, layout, tiles_per_input=5, n_tilings=3)
     else:
-        model = randomised_model(
-            policy, layout, n_rbf=7 if policy != "MlpPolicy" else None, hidden_units=None if policy == "RbfPolicy" else 4
-        )
+        n_rbf, hidden_units = 7 if policy != "MlpPolicy" else None, None if policy == "RbfPolicy" else 4
+        model = randomised_model(policy, layout, n_rbf=n_rbf, hidden_units=hidden_units)
     path = export_policy(model, tmp_dir / f"{policy}-{layout}")
     assert path.suffix == ".aacp"
     obs = observations(model)
@@ -143,7 +139,8 @@ def test_dribbling_model_and_metadata(tmp_dir: Path) -> None:
     path = export_policy(model, tmp_dir / "dribble.aacp", metadata={"env_id": "RoboCupDribblePaper-v0"})
     runtime = RuntimePolicy.load(path)
     assert runtime.header["metadata"] == {"env_id": "RoboCupDribblePaper-v0", "num_timesteps": 500}
-    assert runtime.header["approximators"]["features"] == {"type": "rbf", "n_rbf": 10, "rbf_width": 1.0, "n_features": 100}
+    features = {"type": "rbf", "n_rbf": 10, "rbf_width": 1.0, "rbf_window": 5.0, "n_features": 100}
+    assert runtime.header["approximators"]["features"] == features
     obs = observations(model, 2000)
     expected, _ = model.predict(obs, deterministic=True)
     for o, e in zip(obs, expected, strict=True):
@@ -200,25 +197,15 @@ def load_bytes(tmp_dir: Path, data: bytes) -> RuntimePolicy:
 
 def test_good_file_round_trips(good_file: Path) -> None:
     header, arrays = read_policy_file(good_file)
-    assert header["format"] == "sb3-aac-policy" and header["version"] == 1
+    assert header["format"] == "sb3-aac-policy" and header["version"] == 2
     data = good_file.read_bytes()
     assert data[:8] == b"SB3AACP\x00"
     (header_len,) = struct.unpack_from("<Q", data, 8)
     assert (16 + header_len) % 8 == 0
     assert hashlib.sha256(data[:-32]).digest() == data[-32:]
     assert set(arrays) == {
-        "obs_low",
-        "obs_high",
-        "obs_mid",
-        "obs_half",
-        "param_low",
-        "param_high",
-        "rbf_centers",
-        "rbf_widths",
-        "weight1",
-        "bias1",
-        "weight2",
-        "bias2",
+        *("obs_low", "obs_high", "obs_mid", "obs_half", "param_low", "param_high"),
+        *("rbf_centers", "rbf_widths", "weight1", "bias1", "weight2", "bias2"),
     }
 
 
@@ -247,8 +234,8 @@ def test_trailing_garbage_and_pickle(good_file: Path, tmp_dir: Path) -> None:
 
 
 def test_unknown_version_and_format(good_file: Path, tmp_dir: Path) -> None:
-    with pytest.raises(ValueError, match="unknown format version 2"):
-        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(version=2)))
+    with pytest.raises(ValueError, match="unknown format version 3"):
+        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(version=3)))
     with pytest.raises(ValueError, match="format"):
         load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(format="other")))
 
@@ -407,3 +394,58 @@ def test_load_accepts_the_name_export_was_given(tmp_dir: Path, monkeypatch) -> N
     assert export_policy(model, tmp_dir / "sub" / "named") == tmp_dir / "sub" / "named.aacp"
     assert RuntimePolicy.load(tmp_dir / "sub" / "named").n_types == 3
     assert not [p for p in tmp_dir.rglob(".*")], "a stray temporary"
+
+
+PAPER_RBF_POLICIES = [("RbfPolicy", {"n_rbf": 10}), ("RbfPolicy", {"n_rbf": 50}), ("RbfMlpPolicy", {"hidden_units": 2})]
+
+
+@pytest.mark.parametrize(("policy", "policy_kwargs"), PAPER_RBF_POLICIES)
+def test_rbf_window_decides_as_dense_evaluation(policy: str, policy_kwargs: dict, tmp_dir: Path) -> None:
+    """A trained paper policy with the default RBF window decides as the dense evaluation of the same weights on
+    thousands of observations, within the documented bound on the values; the exported runtime (both backends)
+    decides as predict."""
+    from robocup_dribble import DribbleVecEnv
+
+    from sb3_aac.runtime import BankForward
+
+    model = SarsaAAC(policy, DribbleVecEnv(8, profile="v11"), seed=0, policy_kwargs=policy_kwargs).learn(2000)
+    bank = model.policy.approximators
+    assert bank.rbf_window == 5.0
+    obs = observations(model, N_OBS).astype(np.float64)
+    windowed, _ = model.policy.evaluate(obs)
+    arrays = bank.arrays()
+    dense = BankForward(**arrays).outputs(BankForward(**arrays).features(obs))[0]
+    k = model.policy.n_types
+    np.testing.assert_array_equal(windowed[:, :k].argmax(1), dense[:, :k].argmax(1))
+    # |difference| <= exp(-r**2 / 2) * sum of |weights| on the dropped features (through tanh's slope <= 1 and the
+    # output weights for an MLP head).
+    dropped = (BankForward(**arrays).features(obs) > 0) & (model.policy.kernel().features(obs) == 0)
+    first_layer = np.abs(arrays["weight"] if bank.hidden_units is None else arrays["weight1"].reshape(-1, bank.n_features))
+    bound = np.exp(-12.5) * (dropped @ first_layer.T)
+    if bank.hidden_units is not None:
+        bound = (bound.reshape(len(obs), -1, bank.hidden_units) * np.abs(arrays["weight2"])).sum(-1)
+    assert (np.abs(windowed - dense) <= bound + 1e-12).all()
+    path = export_policy(model, tmp_dir / f"window-{policy}")
+    expected, _ = model.predict(obs[:N_SINGLE], deterministic=True)
+    for backend in ("numpy", "numba"):
+        runtime = RuntimePolicy.load(path, backend=backend)
+        for o, e in zip(obs[:N_SINGLE], expected, strict=True):
+            assert runtime.act(o)[0] == int(e[0])
+
+
+def test_rbf_window_header_is_checked(good_file: Path, tmp_dir: Path) -> None:
+    def bad_window(h):
+        h["approximators"]["features"]["rbf_window"] = -1.0
+
+    with pytest.raises(ValueError, match="rbf_window"):
+        load_bytes(tmp_dir, rewrite(good_file, bad_window))
+
+
+def test_version_1_files_read_as_dense_rbfs(good_file: Path, tmp_dir: Path) -> None:
+    def version_1(h):
+        h["version"] = 1
+        del h["approximators"]["features"]["rbf_window"]
+
+    (tmp_dir / "v1.aacp").write_bytes(rewrite(good_file, version_1))
+    old, new = RuntimePolicy.load(tmp_dir / "v1.aacp"), RuntimePolicy.load(good_file)
+    assert old._bank.window_z2 == np.inf and new._bank.window_z2 == 12.5

@@ -1,4 +1,6 @@
+import csv
 import os
+from itertools import pairwise
 
 import numpy as np
 import pytest
@@ -100,7 +102,7 @@ def test_progress_bar():
 
 
 def test_dump_logs_keys(tmp_path):
-    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0, log_min_timesteps=0)
     model.set_logger(configure(str(tmp_path), ["csv"]))
     model.learn(400, log_interval=5)
     model.dump_logs()  # no arguments, as LogEveryNTimesteps calls it
@@ -156,3 +158,22 @@ def test_stopping_keeps_the_latest_observation():
     assert model._last_obs is seen["new_obs"]
     model.learn(10, reset_num_timesteps=False)
     assert model.num_timesteps == 13 and model._n_updates == 12
+
+
+@pytest.mark.parametrize(("log_min_timesteps", "n_envs"), [(0, 1), (0, 16), (500, 16), (2000, 1)])
+def test_logs_are_dumped_by_episodes_and_timesteps(tmp_path, log_min_timesteps: int, n_envs: int):
+    """A dump needs log_interval more episodes and log_min_timesteps more env steps than the previous one."""
+    env = make_vec_env(ParameterizedTargetEnv, n_envs=n_envs, seed=0)
+    model = SarsaAAC("RbfPolicy", env, seed=0, log_min_timesteps=log_min_timesteps)
+    model.set_logger(configure(str(tmp_path), ["csv"]))
+    model.learn(4000, log_interval=3)
+    rows = list(csv.DictReader((tmp_path / "progress.csv").open()))
+    steps = [0] + [int(row["time/total_timesteps"]) for row in rows]
+    episodes = [0] + [int(row["time/episodes"]) for row in rows]
+    assert len(rows) >= 1
+    assert all(b - a >= max(log_min_timesteps, 1) for a, b in pairwise(steps))
+    assert all(b - a >= 3 for a, b in pairwise(episodes))
+    if log_min_timesteps:
+        assert len(rows) <= 4000 // log_min_timesteps
+    else:  # SB3's cadence: at the first step at which 3 more episodes have ended
+        assert len(rows) >= 20

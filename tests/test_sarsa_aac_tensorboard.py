@@ -8,7 +8,9 @@ from sb3_aac.common.envs import ParameterizedTargetEnv
 
 def test_tensorboard(tmp_path):
     logname = "SarsaAAC"
-    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), tensorboard_log=str(tmp_path), seed=0)
+    model = SarsaAAC(
+        "RbfPolicy", ParameterizedTargetEnv(), tensorboard_log=str(tmp_path), seed=0, log_min_timesteps=0
+    )
     model.learn(300, log_interval=2)
     model.learn(300, log_interval=2, reset_num_timesteps=False)
     assert os.path.isdir(tmp_path / f"{logname}_1")
@@ -45,7 +47,8 @@ def test_custom_tb_log_name(tmp_path):
 
 
 def test_custom_info_keywords(tmp_path):
-    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), info_keywords=("distance",), tensorboard_log=str(tmp_path))
+    env = ParameterizedTargetEnv()
+    model = SarsaAAC("RbfPolicy", env, info_keywords=("distance",), tensorboard_log=str(tmp_path), log_min_timesteps=0)
     model.learn(200, log_interval=1)
     events = EventAccumulator(str(tmp_path / "SarsaAAC_1"))
     events.Reload()

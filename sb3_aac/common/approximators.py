@@ -8,7 +8,8 @@ An :class:`ApproximatorBank` holds ``A`` independent approximators ``f_a(s)``, `
 
   - ``n_rbf=None``: the inputs scaled affinely from ``[low, high]`` to ``[-1, 1]`` (``F = D``);
   - ``n_rbf=m``: per-input arrays of ``m`` Gaussian radial basis functions on the scaled inputs,
-    ``x[i*m + j] = exp(-(s~_i - c_ij)**2 / (2 * sigma_ij**2))`` (``F = D*m``);
+    ``x[i*m + j] = exp(-(s~_i - c_ij)**2 / (2 * sigma_ij**2))`` (``F = D*m``), set to 0 outside a window of
+    ``rbf_window`` standard deviations around the input (not computed at all);
 
 - head, one per approximator (the heads share the features but no weights):
 
@@ -46,11 +47,14 @@ import numpy as np
 import torch as th
 from torch import nn
 
-from sb3_aac.runtime import BankForward
+from sb3_aac.runtime import BankForward, check_rbf_window
 
 if TYPE_CHECKING:
     from sb3_aac.common.tile_coding import TileKernel
     from sb3_aac.runtime import TileForward
+
+# RBFs farther than this many standard deviations from the input are not computed (0): below exp(-12.5) = 3.7e-6.
+DEFAULT_RBF_WINDOW = 5.0
 
 
 def rbf_layout(n_inputs: int, n_rbf: int, rbf_width: float) -> tuple[np.ndarray, np.ndarray]:
@@ -170,6 +174,8 @@ class ApproximatorBank(NumpyBank):
     :param n_rbf: Gaussian RBFs per input, or ``None`` for the scaled inputs themselves
     :param rbf_width: RBF standard deviation in units of the centre spacing
     :param hidden_units: Hidden tanh units of each approximator, or ``None`` for a linear head
+    :param rbf_window: Only the RBFs within this many standard deviations of the input are computed, the others
+        are 0 (:class:`~sb3_aac.runtime.BankForward`); ``None`` computes all
     """
 
     def __init__(
@@ -180,6 +186,7 @@ class ApproximatorBank(NumpyBank):
         n_rbf: int | None = None,
         rbf_width: float = 1.0,
         hidden_units: int | None = None,
+        rbf_window: float | None = None,
     ):
         super().__init__()
         low, high = np.asarray(low, dtype=np.float64).ravel(), np.asarray(high, dtype=np.float64).ravel()
@@ -195,6 +202,8 @@ class ApproximatorBank(NumpyBank):
             raise ValueError(f"hidden_units must be >= 1 or None, got {hidden_units}")
         self.n_inputs, self.n_outputs = len(low), n_outputs
         self.n_rbf, self.hidden_units = n_rbf, hidden_units
+        check_rbf_window(rbf_window)
+        self.rbf_window = rbf_window if n_rbf is not None else None
         low, high = np.where(finite, low, -1.0), np.where(finite, high, 1.0)  # unscaled: mid 0, half-range 1
         self.register_buffer("obs_mid", th.as_tensor((high + low) / 2))
         self.register_buffer("obs_half", th.as_tensor((high - low) / 2))
@@ -219,7 +228,7 @@ class ApproximatorBank(NumpyBank):
         return BankKernel(self)
 
     def _forward_pass(self) -> BankForward:
-        return BankForward(**self.arrays())
+        return BankForward(**self.arrays(), rbf_window=self.rbf_window)
 
     def _output_weights(self) -> tuple[th.Tensor, th.Tensor, int]:
         return (self.weight, self.bias, 0) if self.hidden_units is None else (self.weight2, self.bias2, 0)
@@ -237,7 +246,7 @@ class BankKernel(BankForward):
     def __init__(self, bank: ApproximatorBank):
         if bank.obs_mid.device.type != "cpu":
             raise ValueError(f"The numpy kernel needs CPU tensors, the bank is on {bank.obs_mid.device}")
-        super().__init__(**bank.arrays())
+        super().__init__(**bank.arrays(), rbf_window=bank.rbf_window)
 
     def forward(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache]:
         """``obs``: ``(n, D)`` -> outputs ``(n, A)`` and the cache for :meth:`update`."""
@@ -301,7 +310,7 @@ def step_normalisers(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     root = np.sqrt(w)
     scaled = np.abs(x) * root[..., None]
     gram_row_sums = np.einsum("n...f,...f->n...", scaled, scaled.sum(0))
-    alpha = (w * energy).mean(0)
+    alpha = (w * energy).sum(0) / len(w)  # mean(0), without its Python-level overhead
     weight_batch = np.maximum(np.divide(gram_row_sums.max(0), alpha, out=np.ones_like(alpha), where=alpha > 0), 1.0)
     bias_batch = np.maximum(w.sum(0) / (1.0 - alpha), 1.0)
     return w / weight_batch, w / bias_batch

@@ -131,6 +131,11 @@ class SarsaAAC(BaseAlgorithm):
         ``rollout/ep_<key>_mean`` (mean over the last ``stats_window_size`` episodes that reported it)
     :param stats_window_size: Window size for the rollout logging, specifying the number of episodes to average
         the reported success rate, mean episode length, and mean reward over
+    :param log_min_timesteps: ``learn(log_interval=n)`` dumps the logs once ``n`` episodes (SB3's off-policy
+        convention) *and* at least this many env steps (counted over all lanes) have passed since the previous
+        dump or the start of ``learn``. The spacing in steps keeps logging a fixed share of the work whatever the
+        number of lanes (with 256 lanes, episodes end at every step, so ``n`` episodes alone would dump at every
+        step); 0 dumps every ``n`` episodes, as SB3's DQN does.
     :param tensorboard_log: the log location for tensorboard (if None, no logging)
     :param policy_kwargs: additional arguments to be passed to the policy on creation (see :class:`SarsaAACPolicy`)
     :param verbose: Verbosity level: 0 for no output, 1 for info messages (such as device or wrappers used), 2 for
@@ -164,6 +169,7 @@ class SarsaAAC(BaseAlgorithm):
         param_noise_final: float = 0.05,
         info_keywords: tuple[str, ...] = ("distance", "ball_lost"),
         stats_window_size: int = 100,
+        log_min_timesteps: int = 2000,
         tensorboard_log: str | None = None,
         policy_kwargs: dict[str, Any] | None = None,
         verbose: int = 0,
@@ -205,6 +211,9 @@ class SarsaAAC(BaseAlgorithm):
                 f"for one key write ({info_keywords!r},)"
             )
         self.info_keywords = tuple(info_keywords)
+        if not (isinstance(log_min_timesteps, (int, np.integer)) and log_min_timesteps >= 0):
+            raise ValueError(f"log_min_timesteps must be a whole number of env steps >= 0, got {log_min_timesteps!r}")
+        self.log_min_timesteps = int(log_min_timesteps)
         if _init_setup_model:
             self._setup_model()
 
@@ -265,7 +274,7 @@ class SarsaAAC(BaseAlgorithm):
             *super()._excluded_save_params(),
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
             *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
-            *("_hidden_gain", "_lane_returns", "_finite_weights"),
+            *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump"),
             "_ep_keyword_buffers",
         ]
 
@@ -329,7 +338,8 @@ class SarsaAAC(BaseAlgorithm):
 
         :param total_timesteps: The total number of samples (env steps) to train on
         :param callback: callback(s) called at every step with state of the algorithm.
-        :param log_interval: Dump the logs every ``log_interval`` finished episodes (None: never)
+        :param log_interval: Dump the logs every ``log_interval`` finished episodes, but at most once per
+            ``log_min_timesteps`` env steps (see the class docstring; None: never)
         :param tb_log_name: the name of the run for TensorBoard logging
         :param reset_num_timesteps: whether or not to reset the current timestep number (used in logging)
         :param progress_bar: Display a progress bar using tqdm and rich.
@@ -341,6 +351,7 @@ class SarsaAAC(BaseAlgorithm):
         )
         if reset_num_timesteps:  # like ep_info_buffer in _setup_learn
             self._reset_keyword_buffers()
+        self._last_dump = (self._episode_num, self.num_timesteps)
         callback.on_training_start(locals(), globals())
         assert self.env is not None
         env = self.env
@@ -590,9 +601,13 @@ class SarsaAAC(BaseAlgorithm):
             for key, buffer in self._ep_keyword_buffers.items():
                 if key in infos[i]:
                     buffer.append(float(infos[i][key]))
-        episodes_before = self._episode_num
         self._episode_num += int(dones.sum())
-        if log_interval is not None and self._episode_num // log_interval > episodes_before // log_interval:
+        episodes, timesteps = self._last_dump
+        if (
+            log_interval is not None
+            and self._episode_num - episodes >= log_interval
+            and self.num_timesteps - timesteps >= self.log_min_timesteps
+        ):
             self.dump_logs()
 
     def dump_logs(self) -> None:
@@ -632,6 +647,7 @@ class SarsaAAC(BaseAlgorithm):
         record("time/time_elapsed", int(time_elapsed), exclude="tensorboard")
         record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
         self.logger.dump(step=self.num_timesteps)
+        self._last_dump = (self._episode_num, self.num_timesteps)
         self._train_stats[:] = 0
         self._type_counts[:] = 0
 
