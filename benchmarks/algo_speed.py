@@ -52,9 +52,7 @@ class NullArrayEnv(VecEnv):
     terminates with probability ``1 / mean_length`` per step. Only ``step_arrays`` (and ``reset``) are implemented.
     """
 
-    def __init__(
-        self, n_envs: int, observation_space: gym.spaces.Box, action_space: gym.spaces.Space, mean_length: int = 10
-    ):
+    def __init__(self, n_envs: int, observation_space: gym.spaces.Box, action_space: gym.spaces.Space, mean_length: int = 10):
         super().__init__(n_envs, observation_space, action_space)
         self._rng = np.random.default_rng(0)
         self._low, self._high = observation_space.low.astype(np.float64), observation_space.high.astype(np.float64)
@@ -140,13 +138,19 @@ def main() -> None:
     )
     args = parser.parse_args()
     th.set_num_threads(args.torch_threads)
-    print(f"{args.env}; torch threads {th.get_num_threads()}; {args.steps} steps per measurement; SarsaAAC {args.policy}; "
-          f"load average {os.getloadavg()[0]:.1f}")
-    print("SarsaAAC: DummyVecEnv (SB3 step, tuples) and DribbleVecEnv (array path); PPO: DummyVecEnv of "
-          "FlattenParameterizedAction; DQN: DummyVecEnv of DiscretizeParameterizedAction (both SB3 step)")
+    print(
+        f"{args.env}; torch threads {th.get_num_threads()}; {args.steps} steps per measurement; SarsaAAC {args.policy}; "
+        f"load average {os.getloadavg()[0]:.1f}"
+    )
+    print(
+        "SarsaAAC: DummyVecEnv (SB3 step, tuples) and DribbleVecEnv (array path); PPO: DummyVecEnv of "
+        "FlattenParameterizedAction; DQN: DummyVecEnv of DiscretizeParameterizedAction (both SB3 step)"
+    )
     algos = ("SarsaAAC", "PPO", "DQN", "SarsaAAC+DribbleVecEnv")
-    print(f"{'n_envs':>6} {'SarsaAAC':>10} {'PPO':>8} {'DQN':>8} {'vs PPO':>7} {'vs DQN':>7} {'SarsaAAC+DribbleVecEnv':>23}"
-          "   (env steps/s)")
+    print(
+        f"{'n_envs':>6} {'SarsaAAC':>10} {'PPO':>8} {'DQN':>8} {'vs PPO':>7} {'vs DQN':>7} {'SarsaAAC+DribbleVecEnv':>23}"
+        "   (env steps/s)"
+    )
     for n_envs in args.n_envs:
         rates = {algo: steps_per_second(algo, args.env, n_envs, args.steps, args.policy) for algo in algos}
         array_rate = rates["SarsaAAC+DribbleVecEnv"]

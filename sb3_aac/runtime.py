@@ -152,7 +152,9 @@ class BankForward:
         m = self.feature_a.shape[1]
         step = self.feature_b[:, 1:] - self.feature_b[:, :-1] if m > 1 else np.ones((len(self.feature_b), 1))
         uniform = bool(
-            m > 1 and (self.feature_a == self.feature_a[:, :1]).all() and (step > 0).all()
+            m > 1
+            and (self.feature_a == self.feature_a[:, :1]).all()
+            and (step > 0).all()
             and np.allclose(step, step[:, :1], rtol=1e-9, atol=0.0)
         )
         if not uniform:

@@ -25,7 +25,9 @@ def same_actions(a, b):
 @pytest.mark.parametrize("policy", POLICIES)
 def test_save_load(tmp_path, policy):
     env = DummyVecEnv([ParameterizedTargetEnv])
-    model = SarsaAAC(policy, env, policy_kwargs=dict(hidden_units=4) if policy in ("MlpPolicy", "RbfMlpPolicy") else None, seed=1)
+    model = SarsaAAC(
+        policy, env, policy_kwargs=dict(hidden_units=4) if policy in ("MlpPolicy", "RbfMlpPolicy") else None, seed=1
+    )
     model.learn(300)
     observations = np.random.default_rng(0).uniform(-1, 1, (10, 2)).astype(np.float32)
 
@@ -43,7 +45,9 @@ def test_save_load(tmp_path, policy):
     # Random parameters really change every tensor and every prediction (the numpy views follow).
     before, _ = model.predict(observations, deterministic=True)
     # (a tile policy's integer grid layout stays)
-    random_params = {"policy": {k: th.rand_like(v) * 2 - 1 if v.is_floating_point() else v for k, v in params["policy"].items()}}
+    random_params = {
+        "policy": {k: th.rand_like(v) * 2 - 1 if v.is_floating_point() else v for k, v in params["policy"].items()}
+    }
     model.set_parameters(random_params, exact_match=True)
     for key, value in model.get_parameters()["policy"].items():
         assert th.equal(value, random_params["policy"][key]), key
@@ -140,7 +144,7 @@ def test_load_corrupted_file(tmp_path, corruption):
     else:
         with zipfile.ZipFile(path, "w"):
             pass
-    with pytest.raises(ValueError, match="is not a complete SarsaAAC model|wasn.t a zip-file|is not a usable saved model"):
+    with pytest.raises(ValueError, match=r"is not a complete SarsaAAC model|wasn.t a zip-file|is not a usable saved model"):
         SarsaAAC.load(path)
 
 
@@ -154,5 +158,5 @@ def test_load_other_algorithm_file(tmp_path):
     from stable_baselines3.common.envs import IdentityEnv
 
     DQN("MlpPolicy", IdentityEnv(3), learning_starts=0).save(tmp_path / "dqn.zip")
-    with pytest.raises(ValueError, match="SarsaAAC needs a SarsaAACPolicy .* got <class .*DQNPolicy'> .*another algorithm"):
+    with pytest.raises(ValueError, match=r"SarsaAAC needs a SarsaAACPolicy .* got <class .*DQNPolicy'> .*another algorithm"):
         SarsaAAC.load(tmp_path / "dqn.zip")

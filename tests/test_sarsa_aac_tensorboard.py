@@ -8,9 +8,7 @@ from sb3_aac.common.envs import ParameterizedTargetEnv
 
 def test_tensorboard(tmp_path):
     logname = "SarsaAAC"
-    model = SarsaAAC(
-        "RbfPolicy", ParameterizedTargetEnv(), tensorboard_log=str(tmp_path), seed=0, log_min_timesteps=0
-    )
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), tensorboard_log=str(tmp_path), seed=0, log_min_timesteps=0)
     model.learn(300, log_interval=2)
     model.learn(300, log_interval=2, reset_num_timesteps=False)
     assert os.path.isdir(tmp_path / f"{logname}_1")

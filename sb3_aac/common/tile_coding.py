@@ -34,6 +34,7 @@ from torch import nn
 from sb3_aac.common.approximators import NumpyBank
 from sb3_aac.runtime import TileForward
 
+
 def default_tile_groups(n_inputs: int) -> list[tuple[int, ...]]:
     """Every single input, then every pair of inputs: ``D + D * (D - 1) / 2`` groups."""
     return [(i,) for i in range(n_inputs)] + list(itertools.combinations(range(n_inputs), 2))
@@ -50,9 +51,7 @@ def check_tile_groups(groups: Sequence[Sequence[int]], n_inputs: int) -> list[tu
         group = tuple(group)
         valid = all(isinstance(i, (int, np.integer)) and not isinstance(i, bool) for i in group)
         if not group or not valid or len(set(group)) != len(group) or not all(0 <= i < n_inputs for i in group):
-            raise ValueError(
-                f"Each tile group must be a tuple of distinct input indices in [0, {n_inputs}), got {group!r}"
-            )
+            raise ValueError(f"Each tile group must be a tuple of distinct input indices in [0, {n_inputs}), got {group!r}")
         checked.append(tuple(int(i) for i in group))
     return checked
 
