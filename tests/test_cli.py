@@ -27,7 +27,8 @@ def run_error(capsys, argv: list[str]) -> str:
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("run")
-    assert main(["train", "--timesteps", "600", "--n-envs", "4", "--seed", "1", "--out", str(out), "--eval-episodes", "20",
+    assert main(["train", "--policy", "RbfPolicy", "--timesteps", "600", "--n-envs", "4", "--seed", "1", "--out", str(out),
+                 "--eval-episodes", "20",
                  "--set", "n_rbf=5", "--set", "gamma=0.8", "--set", "type_exploration=boltzmann"]) == 0  # fmt: skip
     return out
 
@@ -49,7 +50,7 @@ def test_train_episodes_tensorboard_other_env(tmp_path: Path, capsys) -> None:
     )
     out = capsys.readouterr().out
     assert "30 episodes" in out and "mean distance" in out and "share >= 20 m" in out and "ball-loss rate" in out
-    assert list((tmp_path / "tb").glob("SarsaAAC_RbfPolicy_1/events.out.tfevents.*"))
+    assert list((tmp_path / "tb").glob("SarsaAAC_TilePolicy_1/events.out.tfevents.*"))
     assert main(["train", "--env", "sb3_aac/ParameterizedTarget-v0", "--policy", "MlpPolicy", "--timesteps", "200",
                  "--n-envs", "2", "--eval-episodes", "3", "--progress-bar"]) == 0  # fmt: skip
     assert "greedy evaluation over 3 episodes: return" in capsys.readouterr().out
@@ -236,8 +237,8 @@ def test_train_out_replaces_the_set_and_keeps_other_files(trained: Path, tmp_pat
     out = tmp_path / "run"
     shutil.copytree(trained, out)
     (out / "reliability.png").write_bytes(b"png")
-    assert main(["train", "--timesteps", "200", "--n-envs", "2", "--seed", "7", "--out", str(out), "--eval-episodes", "0",
-                 "--set", "n_rbf=3"]) == 0  # fmt: skip
+    assert main(["train", "--policy", "RbfPolicy", "--timesteps", "200", "--n-envs", "2", "--seed", "7", "--out", str(out),
+                 "--eval-episodes", "0", "--set", "n_rbf=3"]) == 0  # fmt: skip
     assert json.loads((out / "run.json").read_text())["seed"] == 7
     assert (out / "reliability.png").read_bytes() == b"png"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"] and not list(out.glob(".*"))

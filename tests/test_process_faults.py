@@ -145,7 +145,7 @@ def test_a_live_runs_temporaries_and_running_cell_are_left_alone(tmp_path: Path)
 
 # ------------------------------------------------------------------------------------------------------ the trainer
 
-TRAIN = ["-m", "sb3_aac.cli", "train", "--n-envs", "2", "--eval-episodes", "0", "--set", "n_rbf=3"]
+TRAIN = ["-m", "sb3_aac.cli", "train", "--policy", "RbfPolicy", "--n-envs", "2", "--eval-episodes", "0", "--set", "n_rbf=3"]
 
 
 def run_files(out: Path) -> dict[str, bytes]:

@@ -16,7 +16,7 @@ RESERVED = ("policy", "env", "tensorboard_log", "seed", "device", "verbose", "_i
 POLICY_KEYS = ("hidden_units", "n_rbf", "rbf_width", "obs_bounds", "tile_groups", "tiles_per_input", "n_tilings")
 # --algo: the class name in sb3_aac, its default policy, and the policy arguments --set may give.
 ALGOS = {
-    "sarsa_aac": ("SarsaAAC", "RbfPolicy", POLICY_KEYS),
+    "sarsa_aac": ("SarsaAAC", "TilePolicy", POLICY_KEYS),  # the README's recommended policy
     "pdqn": ("PDQN", "MlpPolicy", ("net_arch", "actor_net_arch", "param_bounding", "initial_params")),
     "mpdqn": ("MPDQN", "MlpPolicy", ("net_arch", "actor_net_arch", "param_bounding", "initial_params")),
 }
