@@ -22,12 +22,11 @@ import torch as th
 import yaml
 from stable_baselines3.common.callbacks import BaseCallback
 
-from robocup_dribble import DribbleVecEnv
+from robocup_dribble import ENV_PROFILES, DribbleVecEnv
 from robocup_dribble.evaluation import evaluate_dribbling
 from sb3_aac import MPDQN, PDQN
 
 HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
-PROFILES = {"RoboCupDribblePaper-v0": "v11", "RoboCupDribble-v0": "v19"}
 FINAL_SEED = 20_000
 
 
@@ -74,7 +73,7 @@ class EvaluateAtBudgets(BaseCallback):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[1])
     parser.add_argument("--algo", choices=["mpdqn", "pdqn"], default="mpdqn")
-    parser.add_argument("--env", choices=list(PROFILES), default="RoboCupDribblePaper-v0")
+    parser.add_argument("--env", choices=list(ENV_PROFILES), default="RoboCupDribblePaper-v0")
     parser.add_argument("--budgets", type=int, nargs="+", default=[150_000])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--episodes", type=int, default=1000, help="evaluation episodes per budget")
@@ -86,9 +85,9 @@ def main() -> None:
     n_envs = kwargs.pop("n_envs")
     rows = []
     for seed in args.seeds:
-        env = DribbleVecEnv(n_envs, profile=PROFILES[args.env])
+        env = DribbleVecEnv(n_envs, profile=ENV_PROFILES[args.env])
         model = algo("MlpPolicy", env, seed=seed, device="cpu", **kwargs)
-        callback = EvaluateAtBudgets(args.budgets, PROFILES[args.env], args.episodes, seed, time.perf_counter())
+        callback = EvaluateAtBudgets(args.budgets, ENV_PROFILES[args.env], args.episodes, seed, time.perf_counter())
         model.learn(max(args.budgets), callback=callback)
         rows += callback.rows
     for budget in sorted(args.budgets):
