@@ -128,9 +128,11 @@ class BankForward:
         scale = 1.0 / obs_half
         shift = obs_mid * scale
         self.rbf = rbf_centers is not None
+        if (rbf_centers is None) != (rbf_widths is None):
+            raise ValueError("RBF features need both rbf_centers and rbf_widths (or neither, for scaled inputs)")
         self.window_z2 = math.inf  # features with z * z above this are 0
         self.window_size: int | None = None  # centres evaluated per input (None: all)
-        if self.rbf:
+        if rbf_centers is not None:
             # exp(-0.5 * ((obs * scale - shift - c) / w)**2) = exp(-(obs * a - b)**2)
             inv_w = np.sqrt(0.5) / rbf_widths
             self.feature_a, self.feature_b = scale[:, None] * inv_w, (shift[:, None] + rbf_centers) * inv_w
@@ -139,11 +141,15 @@ class BankForward:
         else:
             self.feature_a, self.feature_b = scale, shift
         self.mlp = weight1 is not None
-        if self.mlp:
+        if weight1 is not None:
+            if bias1 is None or weight2 is None or bias2 is None:
+                raise ValueError("An MLP head needs weight1, bias1, weight2 and bias2")
             self.w1, self.b1, self.w2, self.b2 = weight1, bias1, weight2, bias2
             self.w1_flat, self.b1_flat = weight1.reshape(-1, weight1.shape[-1]), bias1.reshape(-1)
             self.head_w, self.head_b = self.w1_flat, self.b1_flat
         else:
+            if weight is None or bias is None:
+                raise ValueError("A linear head needs weight and bias")
             self.w, self.b = self.head_w, self.head_b = weight, bias
 
     def _set_window(self, rbf_window: float) -> None:
@@ -178,7 +184,7 @@ class BankForward:
         """
         if self.window_size is not None and obs.size >= WINDOW_MIN_ROWS * len(self.feature_b):
             return self._window_features(obs, out, self.window_size)
-        z = np.multiply(obs[..., None] if self.rbf else obs, self.feature_a, out=out)
+        z: np.ndarray = np.multiply(obs[..., None] if self.rbf else obs, self.feature_a, out=out)
         np.subtract(z, self.feature_b, out=z)
         if not self.rbf:
             return z
@@ -268,7 +274,8 @@ class TileForward:
         position = obs[:, self.inputs] * self.tile_a - self.tile_b  # (n, C, k)
         np.floor(position, out=position)
         np.clip(position, 0.0, self.limit, out=position)
-        return np.einsum("nck,ck->nc", position.astype(np.int64), self.strides) + self.bases
+        active: np.ndarray = np.einsum("nck,ck->nc", position.astype(np.int64), self.strides) + self.bases
+        return active
 
     def outputs(self, active: np.ndarray) -> tuple[np.ndarray, None]:
         """Active features ``(n, C)`` -> every output ``(n, A)`` (and None: there is no hidden layer)."""
@@ -438,7 +445,7 @@ def _parse_header(text: bytes, path: Any) -> dict[str, Any]:
     return header
 
 
-def read_policy_file(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+def read_policy_file(path: str | os.PathLike[str]) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """
     Read and verify a policy file (``path``, or ``path + ".aacp"`` for a name without a suffix, as written).
 
@@ -546,8 +553,9 @@ def _compile_act_kernel() -> Any:  # noqa: C901 (a compiled kernel: its loops an
 
     # reassoc lets LLVM vectorise the dot products (their order differs from numpy's BLAS anyway); no nnan/ninf,
     # so the finiteness check stays valid.
+    # Untyped for mypy: numba infers the argument types from the arrays it is called with.
     @numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
-    def act_kernel(x, pack, meta, phi, active, params):  # noqa: C901  # pragma: no cover
+    def act_kernel(x, pack, meta, phi, active, params):  # type: ignore[no-untyped-def]  # noqa: C901  # pragma: no cover
         # Few arguments: numba's dispatch costs about as much per argument as a small loop iteration does.
         # meta: d, m (RBFs per input, 0: scaled inputs), F, H (0: linear head), K, 8 segment starts in pack,
         # then the K + 1 parameter offsets. pack: BankForward's feature_a, feature_b, head_w, head_b, w2, b2
@@ -576,7 +584,7 @@ def _compile_act_kernel() -> Any:  # noqa: C901 (a compiled kernel: its loops an
                 active[i] = i
             n_active = d
 
-        def output(a):
+        def output(a: int) -> float:  # numba ignores the annotations
             if h > 0:
                 acc = 0.0
                 for u in range(h):
@@ -585,11 +593,11 @@ def _compile_act_kernel() -> Any:  # noqa: C901 (a compiled kernel: its loops an
                     for f in range(n_active):
                         s += pack[pw + row * n_features + active[f]] * phi[f]
                     acc += np.tanh(s + pack[pb + row]) * pack[pw2 + row]
-                return acc + pack[pb2 + a]
+                return acc + pack[pb2 + a]  # type: ignore[no-any-return]  # numba: pack's elements are untyped
             s = 0.0
             for f in range(n_active):
                 s += pack[pw + a * n_features + active[f]] * phi[f]
-            return s + pack[pb + a]
+            return s + pack[pb + a]  # type: ignore[no-any-return]  # numba: pack's elements are untyped
 
         k, best = 0, output(0)
         for a in range(1, n_types):
@@ -667,7 +675,7 @@ class RuntimePolicy:
         # Per type: its parameter bounds as Python floats.
         slices = [self.type_slice(j) for j in range(k)]
         self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in slices]
-        self._kernel_args: tuple | None = None
+        self._kernel_args: tuple[np.ndarray, ...] | None = None
         if self.tiles:
             _check_tile_arrays(arrays, self.obs_size, approx["features"]["n_features"], path)
             if backend == "numba":
@@ -688,8 +696,9 @@ class RuntimePolicy:
                 head2 = [bank.w2, bank.b2] if self.mlp else [np.zeros(0), np.zeros(0)]
                 segments = [bank.feature_a, bank.feature_b, bank.head_w, bank.head_b, *head2, self.param_low, self.param_high]
                 segments.append(np.array([bank.window_z2]))
-                starts = np.cumsum([0] + [seg.size for seg in segments])[:-1]
-                starts = [*starts[:6], starts[6], starts[8]]  # param_low's start also locates param_high
+                segment_starts = np.cumsum([0] + [seg.size for seg in segments])[:-1]
+                # param_low's start also locates param_high
+                starts = [*segment_starts[:6], segment_starts[6], segment_starts[8]]
                 m = bank.feature_a.shape[1] if self.rbf else 0
                 sizes = [self.obs_size, m, approx["features"]["n_features"], self.hidden_units or 0, k]
                 meta = np.array([*sizes, *starts, *self.offsets], dtype=np.int64)
@@ -702,7 +711,7 @@ class RuntimePolicy:
     # ------------------------------------------------------------------ loading
 
     @classmethod
-    def load(cls, path: str | os.PathLike, backend: str = "auto") -> RuntimePolicy:
+    def load(cls, path: str | os.PathLike[str], backend: str = "auto") -> RuntimePolicy:
         """
         Read a policy file written by :func:`sb3_aac.export_policy`.
 
@@ -764,7 +773,7 @@ class RuntimePolicy:
             if k < 0:
                 raise ValueError(f"The observation holds NaN or inf values: {x}")
             return self.type_start + k, self._kernel_args[-1][:dim].astype(self.param_dtypes[k])
-        if self.tiles:
+        if isinstance(self._bank, TileForward):  # self.tiles
             out = self._bank.outputs(self._bank.features(self._observation(obs)[None]))[0][0].tolist()
         else:
             phi = self._bank.features(self._observation(obs), out=self._feature_buffer)
@@ -804,13 +813,15 @@ class RuntimePolicy:
         Every approximator's output for a batch ``(n, D)``: ``(n, A)`` columns Q (K), scaled parameters
         (n_params), value V (1).
         """
-        return self._bank.outputs(self._bank.features(self._batch(obs)))[0]
+        outputs: np.ndarray = self._bank.outputs(self._bank.features(self._batch(obs)))[0]
+        return outputs
 
     def unscale(self, params_scaled: np.ndarray) -> np.ndarray:
         """Scaled parameters ``(..., n_params)`` in ``[-1, 1]`` -> env units, clipped to the bounds (float64)."""
         weight = 0.5 * np.asarray(params_scaled, dtype=np.float64)
         value = self.param_low * (0.5 - weight) + self.param_high * (0.5 + weight)
-        return np.minimum(np.maximum(value, self.param_low), self.param_high)
+        clipped: np.ndarray = np.minimum(np.maximum(value, self.param_low), self.param_high)
+        return clipped
 
     def act_batch(self, obs: Any) -> tuple[np.ndarray, np.ndarray]:
         """
@@ -830,7 +841,7 @@ class RuntimePolicy:
 
     # ------------------------------------------------------------------ SB3-style predict
 
-    def _env_action(self, k: int, params: np.ndarray) -> tuple:
+    def _env_action(self, k: int, params: np.ndarray) -> tuple[Any, ...]:
         """One env action in the file's layout, as ``model.predict`` builds it (0-based ``k``)."""
 
         def box(j: int) -> np.ndarray:

@@ -41,7 +41,7 @@ torch op runs per step. ``ApproximatorBank.forward`` runs the same numpy code an
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import torch as th
@@ -87,12 +87,16 @@ class NumpyBank(nn.Module):
 
     # Axis of the outputs (approximators) in each parameter, where it is not 0.
     output_axes: dict[str, int] = {}  # noqa: RUF012
+    # Number of approximators ``A``, set by every subclass.
+    n_outputs: int
 
     def __init__(self) -> None:
         super().__init__()
         self._kernel: BankKernel | TileKernel | None = None
         # load_state_dict copies in place, but the kernel's constants derived from the buffers would go stale.
-        self.register_load_state_dict_post_hook(lambda module, incompatible_keys: module.invalidate_kernel())
+        self.register_load_state_dict_post_hook(  # type: ignore[no-untyped-call]  # untyped in torch
+            lambda module, incompatible_keys: module.invalidate_kernel()
+        )
 
     @staticmethod
     def _uniform(shape: tuple[int, ...], bound: float) -> nn.Parameter:
@@ -154,14 +158,14 @@ class NumpyBank(nn.Module):
             finite &= np.isfinite(array.reshape(self.n_outputs, -1)).all(1)
         return finite
 
-    def __getstate__(self) -> dict:
+    def __getstate__(self) -> dict[str, Any]:
         # A copy (deepcopy, pickle) gets new storage, so it must not inherit views of ours.
         return {**self.__dict__, "_kernel": None}  # not super(): object.__getstate__ is Python 3.11+
 
     def _apply(self, fn, recurse=True):  # type: ignore[no-untyped-def]
         # Device and dtype moves replace the storage the numpy views point to.
         self._kernel = None
-        return super()._apply(fn, recurse)
+        return super()._apply(fn, recurse)  # type: ignore[no-untyped-call]  # untyped in torch
 
 
 class ApproximatorBank(NumpyBank):
@@ -273,6 +277,8 @@ class BankKernel(BankForward):
             self.w += (g * weights[:, None]).T @ x
             self.b += (g * bias[:, None]).sum(0)
             return
+        if cache.hidden is None:
+            raise ValueError("An MLP bank's update needs the hidden activations of its forward pass, the cache has none")
         h = cache.hidden[:n]  # (n, A, H)
         x_weights, x_bias = step_normalisers(x)
         # Backpropagate through the old output weights before changing them.

@@ -40,15 +40,17 @@ def default_tile_groups(n_inputs: int) -> list[tuple[int, ...]]:
     return [(i,) for i in range(n_inputs)] + list(itertools.combinations(range(n_inputs), 2))
 
 
-def check_tile_groups(groups: Sequence[Sequence[int]], n_inputs: int) -> list[tuple[int, ...]]:
-    """``groups`` as tuples of input indices, each non-empty, in range and without repeats (else ValueError)."""
+def check_tile_groups(groups: object, n_inputs: int) -> list[tuple[int, ...]]:
+    """``groups`` as tuples of input indices, each non-empty, in range and without repeats (else ValueError).
+
+    ``groups`` is user input checked at run time, hence typed ``object``: a sequence of index sequences (a bare
+    index stands for a group of one).
+    """
     if isinstance(groups, str) or not isinstance(groups, Sequence) or len(groups) == 0:
         raise ValueError(f"tile_groups must be a non-empty list of tuples of input indices, got {groups!r}")
     checked = []
-    for group in groups:
-        if isinstance(group, (int, np.integer)):
-            group = (group,)
-        group = tuple(group)
+    for entry in groups:
+        group = (entry,) if isinstance(entry, (int, np.integer)) else tuple(entry)
         valid = all(isinstance(i, (int, np.integer)) and not isinstance(i, bool) for i in group)
         if not group or not valid or len(set(group)) != len(group) or not all(0 <= i < n_inputs for i in group):
             raise ValueError(f"Each tile group must be a tuple of distinct input indices in [0, {n_inputs}), got {group!r}")
@@ -69,9 +71,10 @@ class TileLayout(NamedTuple):
 
 def tile_layout(groups: Sequence[tuple[int, ...]], tiles_per_input: int, n_tilings: int) -> TileLayout:
     """The grids of ``n_tilings`` asymmetrically offset tilings of every group (see the module docstring)."""
-    if not (isinstance(tiles_per_input, (int, np.integer)) and tiles_per_input >= 1):
+    # Run-time checks of user input that the annotations cannot guarantee.
+    if not (isinstance(tiles_per_input, (int, np.integer)) and tiles_per_input >= 1):  # type: ignore[redundant-expr]
         raise ValueError(f"tiles_per_input must be an int >= 1, got {tiles_per_input!r}")
-    if not (isinstance(n_tilings, (int, np.integer)) and n_tilings >= 1):
+    if not (isinstance(n_tilings, (int, np.integer)) and n_tilings >= 1):  # type: ignore[redundant-expr]
         raise ValueError(f"n_tilings must be an int >= 1, got {n_tilings!r}")
     k = max(len(g) for g in groups)
     side = tiles_per_input + 1
@@ -230,7 +233,8 @@ class TileKernel(TileForward):
 
     def features(self, obs: np.ndarray) -> np.ndarray:
         obs = np.ascontiguousarray(obs, dtype=np.float64)
-        return _active_features(obs, self.inputs, self.tile_a, self.tile_b, self.limit, self.strides, self.bases)
+        active: np.ndarray = _active_features(obs, self.inputs, self.tile_a, self.tile_b, self.limit, self.strides, self.bases)
+        return active
 
     def outputs(self, active: np.ndarray) -> tuple[np.ndarray, None]:
         return _outputs(active, self.w, self.b), None

@@ -44,8 +44,8 @@ class SarsaAACPolicy(BasePolicy):
 
     def __init__(
         self,
-        observation_space: spaces.Space,
-        action_space: spaces.Space,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
         hidden_units: int | None = 10,
         n_rbf: int | None = None,
         rbf_width: float = 1.0,
@@ -66,7 +66,10 @@ class SarsaAACPolicy(BasePolicy):
         )
 
     def _init_spaces(
-        self, observation_space: spaces.Space, action_space: spaces.Space, obs_bounds: tuple[np.ndarray, np.ndarray] | None
+        self,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
+        obs_bounds: tuple[np.ndarray, np.ndarray] | None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Check the spaces, initialise the module, parse the action space; return the ``(D,)`` input bounds."""
         if not isinstance(observation_space, spaces.Box):
@@ -122,7 +125,8 @@ class SarsaAACPolicy(BasePolicy):
     def forward(self, obs: PyTorchObs) -> th.Tensor:
         """All approximator outputs ``(n, A)`` as a tensor (column layout in the class docstring), computed by numpy."""
         assert isinstance(obs, th.Tensor)
-        return self.approximators(obs.reshape(len(obs), -1))
+        outputs: th.Tensor = self.approximators(obs.reshape(len(obs), -1))
+        return outputs
 
     def _predict(self, observation: PyTorchObs, deterministic: bool = True) -> th.Tensor:
         raise NotImplementedError("A parameterized action is not one tensor: use predict()")
@@ -142,6 +146,8 @@ class SarsaAACPolicy(BasePolicy):
         """
         obs = np.asarray(observation, dtype=np.float64)
         shape = self.observation_space.shape
+        if shape is None:
+            raise ValueError(f"The observation space {self.observation_space} has no shape; SarsaAAC needs a Box")
         if obs.shape == shape or obs.shape[1:] == shape:
             if not np.isfinite(obs).all():
                 raise ValueError(f"The observation holds NaN or inf values: {observation}")
@@ -207,8 +213,8 @@ class MlpPolicy(SarsaAACPolicy):
 
     def __init__(
         self,
-        observation_space: spaces.Space,
-        action_space: spaces.Space,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
         hidden_units: int | None = 10,
         n_rbf: int | None = None,
         rbf_width: float = 1.0,
@@ -230,8 +236,8 @@ class RbfMlpPolicy(SarsaAACPolicy):
 
     def __init__(
         self,
-        observation_space: spaces.Space,
-        action_space: spaces.Space,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
         hidden_units: int | None = 10,
         n_rbf: int | None = 10,
         rbf_width: float = 1.0,
@@ -253,8 +259,8 @@ class RbfPolicy(SarsaAACPolicy):
 
     def __init__(
         self,
-        observation_space: spaces.Space,
-        action_space: spaces.Space,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
         hidden_units: int | None = None,
         n_rbf: int | None = 10,
         rbf_width: float = 1.0,
@@ -282,8 +288,8 @@ class TilePolicy(SarsaAACPolicy):
 
     def __init__(
         self,
-        observation_space: spaces.Space,
-        action_space: spaces.Space,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
         tile_groups: list[tuple[int, ...]] | None = None,
         tiles_per_input: int = 8,
         n_tilings: int = 8,

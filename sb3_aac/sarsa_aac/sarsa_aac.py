@@ -42,8 +42,10 @@ def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator
     :param rng: random generator
     :return: ``(n,)`` chosen types
     """
+    k: np.ndarray
     if rate <= 0:
-        return q.argmax(1)
+        k = q.argmax(1)
+        return k
     if mode == "epsilon_greedy":
         k = q.argmax(1)
         explore = rng.random(len(q)) < rate
@@ -53,7 +55,8 @@ def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator
     weights = np.exp((q - q.max(1, keepdims=True)) / rate)
     cumulative = weights.cumsum(1)
     u = rng.random(len(q)) * cumulative[:, -1]
-    return np.minimum((cumulative < u[:, None]).sum(1), q.shape[1] - 1)
+    k = np.minimum((cumulative < u[:, None]).sum(1), q.shape[1] - 1)
+    return k
 
 
 class SarsaAAC(BaseAlgorithm):
@@ -152,6 +155,10 @@ class SarsaAAC(BaseAlgorithm):
         "TilePolicy": TilePolicy,
     }
     policy: SarsaAACPolicy
+    # Per-lane discounted returns so far (None until the first step), and the last finite weights (restored on
+    # divergence; None until first kept). Set in _reset_train_stats.
+    _lane_returns: np.ndarray | None
+    _finite_weights: dict[str, th.Tensor] | None
 
     def __init__(
         self,
@@ -191,7 +198,8 @@ class SarsaAAC(BaseAlgorithm):
             # The action space is validated (with a ValueError) when the policy parses it.
             supported_action_spaces=None,
         )
-        if not (isinstance(self.policy_class, type) and issubclass(self.policy_class, SarsaAACPolicy)):
+        # A run-time check: a model loaded from another algorithm's file brings its own policy class.
+        if not (isinstance(self.policy_class, type) and issubclass(self.policy_class, SarsaAACPolicy)):  # type: ignore[redundant-expr]
             raise ValueError(
                 f"SarsaAAC needs a SarsaAACPolicy ({', '.join(self.policy_aliases)} or a subclass), got {self.policy_class} "
                 "(loading a model saved by another algorithm?)"
@@ -205,13 +213,14 @@ class SarsaAAC(BaseAlgorithm):
         self.exploration_final_eps = exploration_final_eps
         self.param_noise_initial = param_noise_initial
         self.param_noise_final = param_noise_final
-        if isinstance(info_keywords, str) or not all(isinstance(key, str) for key in info_keywords):
+        # Run-time checks of user input that the annotations cannot guarantee.
+        if isinstance(info_keywords, str) or not all(isinstance(key, str) for key in info_keywords):  # type: ignore[redundant-expr, unreachable]
             raise ValueError(
                 f"info_keywords must be a tuple of info keys (str), got {info_keywords!r}; "
                 f"for one key write ({info_keywords!r},)"
             )
         self.info_keywords = tuple(info_keywords)
-        if not (isinstance(log_min_timesteps, (int, np.integer)) and log_min_timesteps >= 0):
+        if not (isinstance(log_min_timesteps, (int, np.integer)) and log_min_timesteps >= 0):  # type: ignore[redundant-expr]
             raise ValueError(f"log_min_timesteps must be a whole number of env steps >= 0, got {log_min_timesteps!r}")
         self.log_min_timesteps = int(log_min_timesteps)
         if _init_setup_model:
@@ -228,7 +237,7 @@ class SarsaAAC(BaseAlgorithm):
                 )
         if self.type_exploration not in TYPE_EXPLORATIONS:
             raise ValueError(f"Unknown type_exploration {self.type_exploration!r}, valid values: {list(TYPE_EXPLORATIONS)}")
-        if not (isinstance(self.gamma, (int, float, np.floating)) and 0 <= self.gamma <= 1):
+        if not (isinstance(self.gamma, (int, float, np.floating)) and 0 <= self.gamma <= 1):  # type: ignore[redundant-expr]
             raise ValueError(f"gamma must be in [0, 1], got {self.gamma}")
         if not 0 < self.exploration_fraction <= 1:
             raise ValueError(f"exploration_fraction must be in (0, 1], got {self.exploration_fraction}")
@@ -249,7 +258,8 @@ class SarsaAAC(BaseAlgorithm):
         self.exploration_rate = self.exploration_schedule(self._current_progress_remaining)
         self.param_noise = self.param_noise_schedule(self._current_progress_remaining)
         self.set_random_seed(self.seed)
-        self.policy = self.policy_class(self.observation_space, self.action_space, **self.policy_kwargs)
+        # SB3 types policy_class as type[BasePolicy]; __init__ checked that it is a SarsaAACPolicy.
+        self.policy = self.policy_class(self.observation_space, self.action_space, **self.policy_kwargs)  # type: ignore[assignment]
         self.policy = self.policy.to(self.device)
         # The action a' chosen at _last_obs and not yet executed: (obs (n, D), k (n,), scaled params (n, P)).
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
@@ -369,9 +379,14 @@ class SarsaAAC(BaseAlgorithm):
         try:
             while self.num_timesteps < total_timesteps:
                 _, k, params = self._pending
+                # Callbacks see ``actions`` in locals(): the env's actions, or (types, params) on the array path.
+                actions: np.ndarray | tuple[np.ndarray, np.ndarray]
+                new_obs: np.ndarray
+                infos: list[Mapping[str, Any]]
                 if array_env is None:
                     actions = self.policy.spec.to_env(k, params)
-                    new_obs, rewards, dones, infos = env.step(actions)
+                    # SB3 types VecEnv observations as a union; a Box observation space gives an array.
+                    new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
                 else:
                     actions = (k, params)
                     new_obs, rewards, dones, infos = self._step_arrays(array_env, k, params)
@@ -384,10 +399,11 @@ class SarsaAAC(BaseAlgorithm):
                     break
 
                 self._update_current_progress_remaining(self.num_timesteps, total_timesteps)
-                any_done = dones.any()
+                any_done = bool(dones.any())
                 if any_done:  # episode statistics and success flags exist only where an episode ended
                     ended = np.flatnonzero(dones)
-                    self._update_info_buffer([infos[i] for i in ended], dones[ended])
+                    # SB3 annotates the infos as dicts but only reads them.
+                    self._update_info_buffer([infos[i] for i in ended], dones[ended])  # type: ignore[misc]
                 self._train_step(new_obs, rewards, dones, infos, any_done)
                 self._last_obs, self._last_episode_starts = new_obs, dones
                 if any_done:
@@ -429,7 +445,7 @@ class SarsaAAC(BaseAlgorithm):
         lr[policy.value_index] = self.lr_schedule(progress)
 
     def _train_step(
-        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict], any_done: bool
+        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[Mapping[str, Any]], any_done: bool
     ) -> None:
         """One SARSA-AAC update of every approximator, for all envs at once; then choose the next action."""
         policy, kernel, gamma = self.policy, self._kernel, self.gamma
@@ -473,7 +489,8 @@ class SarsaAAC(BaseAlgorithm):
         # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0.
         err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
         err[:, vi] = delta
-        kernel.update(cache, err, self._lr, self._hidden_gain)
+        # The cache comes from the same kernel's forward pass, so its kind matches (mypy cannot pair the unions).
+        kernel.update(cache, err, self._lr, self._hidden_gain)  # type: ignore[arg-type]
         self._n_updates += 1
 
         self._pending = (next_obs, next_k, next_params)
@@ -494,7 +511,8 @@ class SarsaAAC(BaseAlgorithm):
             lane_returns = self._lane_returns = np.zeros(len(rewards))
         lane_returns *= self.gamma
         lane_returns += rewards
-        self._return_moments += (len(rewards), lane_returns @ lane_returns)
+        self._return_moments[0] += len(rewards)
+        self._return_moments[1] += lane_returns @ lane_returns
         lane_returns[dones] = 0.0
         count, square_sum = self._return_moments
         scale = math.sqrt(square_sum / count)
@@ -533,7 +551,9 @@ class SarsaAAC(BaseAlgorithm):
 
     def _reset_keyword_buffers(self) -> None:
         """Windows of the ``info_keywords`` values of finished episodes (like ``ep_info_buffer``)."""
-        self._ep_keyword_buffers = {key: deque(maxlen=self._stats_window_size) for key in self.info_keywords}
+        self._ep_keyword_buffers: dict[str, deque[float]] = {
+            key: deque(maxlen=self._stats_window_size) for key in self.info_keywords
+        }
 
     def _reset_train_stats(self) -> None:
         n_types = self.policy.n_types
@@ -542,8 +562,8 @@ class SarsaAAC(BaseAlgorithm):
         self._td_chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self._hidden_gain = np.ones_like(self._lr)
         self._set_return_units()
-        self._lane_returns: np.ndarray | None = None
-        self._finite_weights: dict[str, th.Tensor] | None = None
+        self._lane_returns = None
+        self._finite_weights = None
         self._finite_weights_timestep = 0
         # Sums since the last dump: n, delta, |delta|, delta^2, q_error^2, count(delta > 0); type counts.
         self._train_stats = np.zeros(6)
@@ -596,7 +616,7 @@ class SarsaAAC(BaseAlgorithm):
             "or rescale the rewards; also check that the env returns finite rewards and observations."
         )
 
-    def _on_episodes_end(self, dones: np.ndarray, infos: list[dict], log_interval: int | None) -> None:
+    def _on_episodes_end(self, dones: np.ndarray, infos: list[Mapping[str, Any]], log_interval: int | None) -> None:
         for i in np.flatnonzero(dones):
             for key, buffer in self._ep_keyword_buffers.items():
                 if key in infos[i]:
@@ -654,7 +674,7 @@ class SarsaAAC(BaseAlgorithm):
     # ------------------------------------------------------------------ persistence
 
     @classmethod
-    def load(  # type: ignore[override]
+    def load(
         cls: type[SelfSarsaAAC],
         path: Any,
         env: GymEnv | None = None,
