@@ -87,18 +87,20 @@ def unscale(low: np.ndarray, high: np.ndarray, params_scaled: np.ndarray) -> np.
     return clipped
 
 
-def env_action(layout: str, start: int, k: int, n_types: int, box: Callable[[int], np.ndarray]) -> tuple[Any, ...]:
+def env_action(
+    layout: str, start: int, k: int, n_types: int, box: Callable[[int, np.ndarray], np.ndarray], params: np.ndarray
+) -> tuple[Any, ...]:
     """
     One env action of 0-based type ``k`` in action ``layout`` (see ``LAYOUTS``), as ``model.predict`` returns it.
 
     :param start: the ``Discrete``'s start, added to ``k`` (a ``"oneof"`` action numbers its types from 0)
-    :param box: ``box(j)`` is type ``j``'s parameters in its Box's shape and dtype
+    :param box: ``box(j, params)`` is type ``j``'s part of the parameter vector ``params`` in its Box's shape and dtype
     """
     if layout == "oneof":
-        return (k, box(k))
+        return (k, box(k, params))
     if layout == "shared":
-        return (start + k, box(k))
-    values = tuple(box(j) for j in range(n_types))
+        return (start + k, box(k, params))
+    values = tuple(box(j, params) for j in range(n_types))
     return (start + k, values) if layout == "nested" else (start + k, *values)
 
 
@@ -874,11 +876,11 @@ class RuntimePolicy:
 
     def _env_action(self, k: int, params: np.ndarray) -> tuple[Any, ...]:
         """One env action in the file's layout, as ``model.predict`` builds it (0-based ``k``)."""
+        return env_action(self.layout, self.type_start, k, self.n_types, self._box_value, params)
 
-        def box(j: int) -> np.ndarray:
-            return params[self.type_slice(j)].astype(self.param_dtypes[j]).reshape(self.param_shapes[j])
-
-        return env_action(self.layout, self.type_start, k, self.n_types, box)
+    def _box_value(self, j: int, params: np.ndarray) -> np.ndarray:
+        """Type ``j``'s part of the parameter vector ``params`` in its Box's shape and dtype."""
+        return params[self.type_slice(j)].astype(self.param_dtypes[j]).reshape(self.param_shapes[j])
 
     def predict(
         self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True

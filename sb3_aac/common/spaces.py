@@ -209,7 +209,7 @@ class ParameterizedActionSpec:
         # params: (n_params,) unscaled, clipped (and cast if all Boxes share a dtype); a fresh array per call
         if not 0 <= k < self.n_types:
             raise ValueError(f"Action type {k} out of range [0, {self.n_types})")
-        return env_action(self.layout, self.start, k, self.n_types, lambda j: self._box_value(j, params))
+        return env_action(self.layout, self.start, k, self.n_types, self._box_value, params)
 
     def _box_value(self, k: int, params: np.ndarray) -> np.ndarray:
         part, shape = self._box_views[k]
