@@ -28,6 +28,7 @@ import math
 import os
 import stat
 import struct
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -58,14 +59,49 @@ TILE_ARRAYS = (
 __all__ = [
     "FORMAT_NAME",
     "FORMAT_VERSION",
+    "LAYOUTS",
     "MAGIC",
     "BankForward",
     "RuntimePolicy",
     "TileForward",
+    "env_action",
     "expected_array_shapes",
     "policy_file_path",
     "read_policy_file",
+    "unscale",
 ]
+
+
+def unscale(low: np.ndarray, high: np.ndarray, params_scaled: np.ndarray) -> np.ndarray:
+    """
+    Map parameters from ``[-1, 1]`` to ``[low, high]`` and clip them inside the bounds (float64, ``(..., n_params)``).
+
+    ``-1`` and ``1`` give ``low`` and ``high`` exactly, whatever the dtype: ``mid + half * p`` can miss a float64
+    bound by one ulp, so the interpolation weights both bounds instead. Training
+    (:meth:`sb3_aac.common.spaces.ParameterizedActionSpec.unscale`) and :meth:`RuntimePolicy.unscale` call this.
+    """
+    weight = 0.5 * np.asarray(params_scaled, dtype=np.float64)
+    value = low * (0.5 - weight) + high * (0.5 + weight)
+    # minimum/maximum: np.clip costs several times more on small arrays.
+    clipped: np.ndarray = np.minimum(np.maximum(value, low), high)
+    return clipped
+
+
+def env_action(
+    layout: str, start: int, k: int, n_types: int, box: Callable[[int, np.ndarray], np.ndarray], params: np.ndarray
+) -> tuple[Any, ...]:
+    """
+    One env action of 0-based type ``k`` in action ``layout`` (see ``LAYOUTS``), as ``model.predict`` returns it.
+
+    :param start: the ``Discrete``'s start, added to ``k`` (a ``"oneof"`` action numbers its types from 0)
+    :param box: ``box(j, params)`` is type ``j``'s part of the parameter vector ``params`` in its Box's shape and dtype
+    """
+    if layout == "oneof":
+        return (k, box(k, params))
+    if layout == "shared":
+        return (start + k, box(k, params))
+    values = tuple(box(j, params) for j in range(n_types))
+    return (start + k, values) if layout == "nested" else (start + k, *values)
 
 
 # Batches of at least this many observations gather the RBF window (fancy indexing); smaller ones, where its fixed
@@ -818,10 +854,7 @@ class RuntimePolicy:
 
     def unscale(self, params_scaled: np.ndarray) -> np.ndarray:
         """Scaled parameters ``(..., n_params)`` in ``[-1, 1]`` -> env units, clipped to the bounds (float64)."""
-        weight = 0.5 * np.asarray(params_scaled, dtype=np.float64)
-        value = self.param_low * (0.5 - weight) + self.param_high * (0.5 + weight)
-        clipped: np.ndarray = np.minimum(np.maximum(value, self.param_low), self.param_high)
-        return clipped
+        return unscale(self.param_low, self.param_high, params_scaled)
 
     def act_batch(self, obs: Any) -> tuple[np.ndarray, np.ndarray]:
         """
@@ -843,16 +876,11 @@ class RuntimePolicy:
 
     def _env_action(self, k: int, params: np.ndarray) -> tuple[Any, ...]:
         """One env action in the file's layout, as ``model.predict`` builds it (0-based ``k``)."""
+        return env_action(self.layout, self.type_start, k, self.n_types, self._box_value, params)
 
-        def box(j: int) -> np.ndarray:
-            return params[self.type_slice(j)].astype(self.param_dtypes[j]).reshape(self.param_shapes[j])
-
-        if self.layout == "oneof":
-            return (k, box(k))
-        if self.layout == "shared":
-            return (self.type_start + k, box(k))
-        values = tuple(box(j) for j in range(self.n_types))
-        return (self.type_start + k, values) if self.layout == "nested" else (self.type_start + k, *values)
+    def _box_value(self, j: int, params: np.ndarray) -> np.ndarray:
+        """Type ``j``'s part of the parameter vector ``params`` in its Box's shape and dtype."""
+        return params[self.type_slice(j)].astype(self.param_dtypes[j]).reshape(self.param_shapes[j])
 
     def predict(
         self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True

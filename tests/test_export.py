@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import os
+import shutil
 import struct
 import subprocess
 import sys
@@ -167,6 +169,67 @@ print(policy.act([0.1, -0.2])[0])
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=False)
     assert result.returncode == 0, result.stderr
     assert int(result.stdout) == model.predict(np.array([0.1, -0.2], np.float32), deterministic=True)[0][0]
+
+
+def test_importing_the_runtime_imports_no_ml_stack() -> None:
+    """``sb3_aac``'s ``__init__`` loads the algorithms lazily: the runtime module imports no torch, SB3 or Gymnasium."""
+    script = """
+import sys
+from sb3_aac.runtime import RuntimePolicy
+import sb3_aac
+print(sorted(name for name in ("torch", "stable_baselines3", "gymnasium") if name in sys.modules))
+print(sb3_aac.RuntimePolicy is RuntimePolicy)
+"""
+    root = Path(__file__).resolve().parents[1]
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=root, check=False)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["[]", "True"]
+
+
+def test_runtime_in_a_numpy_only_venv(tmp_path: Path) -> None:
+    """As the README tells agents: runtime.py copied beside an agent, in a fresh venv with numpy alone, acts the same."""
+    model = randomised_model("RbfPolicy", "nested")
+    policy_path = export_policy(model, tmp_path / "agent.aacp")
+    obs = observations(model, 200)
+    np.save(tmp_path / "obs.npy", obs)
+    agent_dir = tmp_path / "agent"
+    agent_dir.mkdir()
+    shutil.copy(Path(__file__).resolve().parents[1] / "sb3_aac" / "runtime.py", agent_dir / "runtime.py")
+
+    venv_dir = tmp_path / "venv"
+    python = venv_dir / ("Scripts" if os.name == "nt" else "bin") / "python"
+    for step, command in (
+        ("create a venv", [sys.executable, "-m", "venv", str(venv_dir)]),
+        ("pip install numpy", [str(python), "-m", "pip", "install", "-q", "--disable-pip-version-check", "numpy"]),
+    ):
+        made = subprocess.run(command, capture_output=True, text=True, check=False)
+        if made.returncode != 0:
+            pytest.skip(f"cannot {step} here (no venv/ensurepip module or no package index): {made.stderr[-500:]}")
+
+    script = f"""
+import importlib.util, json, sys
+sys.path.insert(0, {str(agent_dir)!r})
+missing = [name for name in ("torch", "stable_baselines3", "gymnasium", "sb3_aac", "numba")
+           if importlib.util.find_spec(name) is not None]
+assert not missing, f"the venv is not numpy-only: {{missing}}"
+import numpy as np
+import runtime
+policy = runtime.RuntimePolicy.load({str(policy_path)!r})
+decisions = map(policy.act, np.load({str(tmp_path / "obs.npy")!r}))
+print(json.dumps([[action_type, params.tolist()] for action_type, params in decisions]))
+"""
+    # -I: no PYTHONPATH, no user site-packages, so nothing from this process's environment leaks in.
+    result = subprocess.run([str(python), "-I", "-c", script], capture_output=True, text=True, check=False)
+    assert result.returncode == 0, result.stderr
+    decisions = json.loads(result.stdout)
+    assert len(decisions) == len(obs)
+
+    here = RuntimePolicy.load(policy_path, backend="numpy")
+    for x, (action_type, params) in zip(obs, decisions, strict=True):
+        expected_type, expected_params = here.act(x)
+        assert action_type == expected_type
+        np.testing.assert_array_equal(np.array(params, expected_params.dtype), expected_params)
+        assert action_type == model.predict(x, deterministic=True)[0][0]
 
 
 # ---------------------------------------------------------------------------------------------------- bad files

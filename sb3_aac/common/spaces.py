@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-LAYOUTS = ("nested", "flat", "shared", "oneof")
+from sb3_aac.runtime import env_action, unscale
 
 _SUPPORTED = (
     "Tuple(Discrete(K), Tuple(Box_1, ..., Box_K)) (nested), Tuple(Discrete(K), Box_1, ..., Box_K) (flat), "
@@ -173,14 +173,9 @@ class ParameterizedActionSpec:
         """
         Map parameters from ``[-1, 1]`` to ``[low, high]`` and clip them inside the bounds. Shape ``(..., n_params)``.
 
-        ``-1`` and ``1`` give ``low`` and ``high`` exactly, whatever the dtype: ``mid + half * p`` can miss a float64
-        bound by one ulp, so the interpolation weights both bounds instead.
+        The formula is :func:`sb3_aac.runtime.unscale`, which the exported policy's runtime uses as well.
         """
-        weight = 0.5 * np.asarray(params_scaled, dtype=np.float64)
-        value = self.low * (0.5 - weight) + self.high * (0.5 + weight)
-        # minimum/maximum: np.clip costs several times more on small arrays.
-        clipped: np.ndarray = np.minimum(np.maximum(value, self.low), self.high)
-        return clipped
+        return unscale(self.low, self.high, params_scaled)
 
     def _env_params(self, params_scaled: np.ndarray) -> np.ndarray:
         params = self.unscale(params_scaled)
@@ -214,13 +209,7 @@ class ParameterizedActionSpec:
         # params: (n_params,) unscaled, clipped (and cast if all Boxes share a dtype); a fresh array per call
         if not 0 <= k < self.n_types:
             raise ValueError(f"Action type {k} out of range [0, {self.n_types})")
-        if self.layout == "oneof":
-            return (k, self._box_value(k, params))
-        env_k = self.start + k
-        if self.layout == "shared":
-            return (env_k, self._box_value(k, params))
-        values = tuple(self._box_value(j, params) for j in range(self.n_types))
-        return (env_k, values) if self.layout == "nested" else (env_k, *values)
+        return env_action(self.layout, self.start, k, self.n_types, self._box_value, params)
 
     def _box_value(self, k: int, params: np.ndarray) -> np.ndarray:
         part, shape = self._box_views[k]
