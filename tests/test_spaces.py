@@ -155,3 +155,12 @@ def test_unscale_hits_bounds_exactly(low, width, dtype):
     assert spec.unscale(np.array([1.0]))[0] == box.high[0]
     assert spec.unscale(np.array([-3.0]))[0] == box.low[0]
     assert spec.unscale(np.array([3.0]))[0] == box.high[0]
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_to_env_predicted_is_a_batch_or_one_action(layout):
+    spec = ParameterizedActionSpec.from_space(make_space(layout, 0))
+    k, params = np.array([2, 0]), np.random.default_rng(1).uniform(-1, 1, (2, spec.n_params))
+    batch = spec.to_env_predicted(k, params, vectorized=True)
+    assert batch.dtype == object and repr(list(batch)) == repr(list(spec.to_env(k, params)))
+    assert repr(spec.to_env_predicted(k[:1], params[:1], vectorized=False)) == repr(spec.to_env_single(2, params[0]))

@@ -201,6 +201,12 @@ class ParameterizedActionSpec:
             out[i] = self._action(int(k[i]), params[i])
         return out
 
+    def to_env_predicted(self, k: np.ndarray, params_scaled: np.ndarray, vectorized: bool) -> Any:
+        """``predict``'s answer: :meth:`to_env` for a batch (``vectorized``), else the first row as one env action."""
+        if vectorized:
+            return self.to_env(k, params_scaled)
+        return self.to_env_single(int(k[0]), params_scaled[0])
+
     def to_env_single(self, k: int, params_scaled: np.ndarray) -> tuple[Any, ...]:
         """Like :meth:`to_env` for one action: ``k`` an int, ``params_scaled`` of shape ``(n_params,)``."""
         return self._action(int(k), self._env_params(np.asarray(params_scaled)))

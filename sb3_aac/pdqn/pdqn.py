@@ -318,7 +318,7 @@ class PDQN(OffPolicyAlgorithm):
             return self.policy.predict(observation, state, episode_start, deterministic=True)
         obs, vectorized = self.policy.observation_batch(observation)
         k, params = self._greedy_numpy(obs)
-        return self.policy.env_actions(self._random_types(k, self.exploration_rate), params, vectorized), state
+        return self.policy.spec.to_env_predicted(self._random_types(k, self.exploration_rate), params, vectorized), state
 
     # ------------------------------------------------------------------ collecting
 

@@ -241,12 +241,6 @@ class PDQNPolicy(BasePolicy):
             f"please use {shape} or (n_env, {', '.join(map(str, shape))}) for the observation shape."
         )
 
-    def env_actions(self, k: np.ndarray, params: np.ndarray, vectorized: bool) -> Any:
-        """Env action(s) from types ``(n,)`` and scaled parameters ``(n, n_params)``: a tuple, or an object array."""
-        if vectorized:
-            return self.spec.to_env(k, params)
-        return self.spec.to_env_single(int(k[0]), params[0])
-
     def predict(  # type: ignore[override]
         self,
         observation: np.ndarray,
@@ -265,7 +259,7 @@ class PDQNPolicy(BasePolicy):
         obs, vectorized = self.observation_batch(observation)
         with th.no_grad():
             _, params, k = self.greedy(self.features(th.as_tensor(obs, device=self.device)))
-        return self.env_actions(k.cpu().numpy(), params.cpu().numpy(), vectorized), state
+        return self.spec.to_env_predicted(k.cpu().numpy(), params.cpu().numpy(), vectorized), state
 
 
 MlpPolicy = PDQNPolicy

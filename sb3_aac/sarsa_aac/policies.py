@@ -165,9 +165,7 @@ class SarsaAACPolicy(BasePolicy):
             k = out[:, self.q_slice].argmax(1)
         if params is None:
             params = out[:, self.param_slice]
-        if vectorized:
-            return self.spec.to_env(k, params)
-        return self.spec.to_env_single(int(k[0]), params[0])
+        return self.spec.to_env_predicted(k, params, vectorized)
 
     def predict(  # type: ignore[override]
         self,
