@@ -7,7 +7,7 @@ fresh players (evaluation seed 20000, as the benchmark's final evaluations) each
 in ``--budgets``. Hyperparameters: ``hyperparams/mpdqn.yml`` (``RoboCupDribblePaper-v0``). Prints one JSON line per
 (seed, budget) and a summary line per budget (mean over seeds).
 
-Usage: ``python benchmarks/pdqn_dribble.py [--algo mpdqn|pdqn] [--budgets 150000 1000000] [--seeds 0 1 2]``
+Usage: ``python -m benchmarks.pdqn_dribble [--algo mpdqn|pdqn] [--budgets 150000 1000000] [--seeds 0 1 2]``
 """
 
 from __future__ import annotations
@@ -15,29 +15,17 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from pathlib import Path
 
 import numpy as np
 import torch as th
-import yaml
 from stable_baselines3.common.callbacks import BaseCallback
 
 from robocup_dribble import ENV_PROFILES, DribbleVecEnv
 from robocup_dribble.evaluation import evaluate_dribbling
+from benchmarks.zoo_hyperparams import settings
 from sb3_aac import MPDQN, PDQN
 
-HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
 FINAL_SEED = 20_000
-
-
-def settings(algo: str, env_id: str) -> dict:
-    """The rl-zoo3 entry of ``hyperparams/<algo>.yml`` as constructor arguments (plus n_envs)."""
-    entry = dict(yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())[env_id])
-    entry.pop("n_timesteps")
-    entry.pop("policy")
-    if "policy_kwargs" in entry:
-        entry["policy_kwargs"] = eval(entry["policy_kwargs"], {"dict": dict})  # rl-zoo3's convention: a dict() string
-    return entry
 
 
 class EvaluateAtBudgets(BaseCallback):

@@ -6,7 +6,7 @@ training length: the reference trains 20,000 episodes; this script trains ``--st
 greedy policy every ``--eval-every`` steps on ``--eval-episodes`` fresh episodes, then once more on
 ``--final-episodes`` (1,000 in the papers). It prints one line per evaluation and a final JSON line.
 
-Usage: ``python benchmarks/pdqn_platform.py [--algo mpdqn|pdqn] [--steps 100000] [--seed 0]``
+Usage: ``python -m benchmarks.pdqn_platform [--algo mpdqn|pdqn] [--steps 100000] [--seed 0]``
 """
 
 from __future__ import annotations
@@ -23,30 +23,8 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 
+from benchmarks.zoo_hyperparams import settings
 from sb3_aac import MPDQN, PDQN, SelectObservation
-
-# The reference code's Platform settings (run_platform_pdqn.py): gamma 0.9, minibatch 128, replay memory 10,000,
-# 500 transitions before learning, Adam 1e-3 (Q) / 1e-4 (actor), Polyak 0.1 (Q) / 0.001 (actor), OU noise with
-# sigma 1e-4, epsilon 1 -> 0.01, one hidden layer of 128 ReLUs, inverting gradients, MSE, gradient clip 10, and
-# the actor's parameters starting at (3, 10, 400).
-PLATFORM_KWARGS = dict(
-    learning_rate=1e-3,
-    actor_learning_rate=1e-4,
-    buffer_size=10_000,
-    learning_starts=500,
-    batch_size=128,
-    tau=0.1,
-    actor_tau=0.001,
-    gamma=0.9,
-    exploration_initial_eps=1.0,
-    exploration_final_eps=0.01,
-    param_noise="ornstein_uhlenbeck",
-    param_noise_std=1e-4,
-    loss="mse",
-    max_grad_norm=10.0,
-    info_keywords=(),
-    policy_kwargs=dict(net_arch=[128], initial_params=[3.0, 10.0, 400.0]),
-)
 
 
 def make_env(seed: int, n_envs: int = 1):
@@ -89,10 +67,9 @@ def main() -> None:
     model = algo(
         "MlpPolicy",
         make_env(args.seed),
-        exploration_fraction=args.exploration_fraction,
         seed=args.seed,
         device="cpu",
-        **PLATFORM_KWARGS,
+        **{**settings(args.algo, "Platform-v0"), "exploration_fraction": args.exploration_fraction},
     )
     evaluation = GreedyEvaluation(args.eval_every, args.eval_episodes, args.seed)
     start = time.perf_counter()

@@ -1,0 +1,23 @@
+"""The settings of ``hyperparams/<algo>.yml`` (rl-zoo3's format) as constructor arguments, so the benchmark scripts
+train with exactly what ``examples/rl_zoo3_train.py`` trains with: one definition of each setting."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
+# rl-zoo3's own keys: how long, which policy, and how the env is wrapped (the scripts build their envs themselves).
+ZOO_KEYS = ("n_timesteps", "policy", "env_wrapper")
+
+
+def settings(algo: str, env_id: str) -> dict[str, Any]:
+    """The entry of ``env_id`` in ``hyperparams/<algo>.yml`` without rl-zoo3's own keys (``n_envs`` stays)."""
+    entry = dict(yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())[env_id])
+    for key in ZOO_KEYS:
+        entry.pop(key, None)
+    if "policy_kwargs" in entry:
+        entry["policy_kwargs"] = eval(entry["policy_kwargs"], {"dict": dict})  # rl-zoo3's convention: a dict() string
+    return entry
