@@ -22,8 +22,9 @@ from stable_baselines3.common.noise import NormalActionNoise
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
 import robocup_dribble  # noqa: F401  (registers the env ids)
-from robocup_dribble import DribbleEnv, DribbleVecEnv
+from benchmarks import domains
 from benchmarks.presets import BASELINES
+from robocup_dribble import DribbleEnv, DribbleVecEnv
 from sb3_aac.common.spaces import ParameterizedActionSpec
 from sb3_aac.wrappers import (
     DiscretizeParameterizedAction,
@@ -85,8 +86,8 @@ class DiscreteActionAdapter:
 
 
 def env_action_space(env_id: str) -> gym.spaces.Space:
-    """The Tuple action space of a registered env id."""
-    env = gym.make(env_id)
+    """The parameterized action space of a benchmark env id."""
+    env = gym.make(env_id) if domains.is_dribbling(env_id) else domains.platform_env()
     try:
         return env.action_space
     finally:
@@ -137,10 +138,11 @@ class WrappedDribbleVecEnv(VecEnvWrapper):
 
 
 def baseline_env(env_id: str, algo: str, n_envs: int | None = None, seed: int = 0, batched: bool = True) -> VecEnv:
-    """The training VecEnv of a baseline: ``n_envs`` dribbling lanes behind the algorithm's action wrapper.
+    """The training VecEnv of a baseline: ``n_envs`` lanes of ``env_id`` behind the algorithm's action wrapper.
 
-    :param batched: True (the benchmark's choice): one :class:`WrappedDribbleVecEnv`; False: SB3's ``make_vec_env``
-        over ``gym.make(env_id)`` with Monitor and the gym wrapper (the same env and actions, about 2x slower for A2C)
+    :param batched: for dribbling, True (the benchmark's choice): one :class:`WrappedDribbleVecEnv`; False: SB3's
+        ``make_vec_env`` over ``gym.make(env_id)`` with Monitor and the gym wrapper (the same env and actions, about 2x
+        slower for A2C). Platform always runs in SB3's ``DummyVecEnv``.
     """
     spec = BASELINES[algo]
     if spec["wrapper"] == "flatten":
@@ -148,6 +150,8 @@ def baseline_env(env_id: str, algo: str, n_envs: int | None = None, seed: int = 
     else:
         wrapper, wrapper_kwargs = DiscretizeParameterizedAction, {"bins": spec["bins"]}
     n_envs = n_envs or spec["n_envs"]
+    if not domains.is_dribbling(env_id):
+        return domains.train_env(env_id, n_envs, seed, lambda env: wrapper(env, **wrapper_kwargs))
     if not batched:
         return make_vec_env(env_id, n_envs=n_envs, seed=seed, wrapper_class=wrapper, wrapper_kwargs=wrapper_kwargs)
     profile = gym.spec(env_id).kwargs["profile"]

@@ -1,5 +1,5 @@
-"""Evaluating a policy during and after training: the summary every result file uses, the decision cost, and
-:class:`DribbleEvalCallback` (the learning curve)."""
+"""Evaluating a policy during and after training: the decision cost, and :class:`EvalCallback` (the learning curve
+of any domain of :mod:`benchmarks.domains`)."""
 
 from __future__ import annotations
 
@@ -10,34 +10,29 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
+from benchmarks import domains
 from benchmarks.presets import EVAL_SEED, FINAL_SEED
-from robocup_dribble import DribbleVecEnv
-from robocup_dribble.evaluation import DribbleReport, evaluate_dribbling
 
-REACH_METRES = 20.0  # the paper's "at least around 20 meters with high reliability" (§4.1)
 PREDICT_CALLS = 300  # single-observation predict calls timed per cell (the median is reported)
 
 
-def distance_stats(d: np.ndarray) -> dict[str, float]:
-    """Mean, median and max of per-episode metres (the keys every result file uses)."""
-    return {"distance_mean": float(np.mean(d)), "distance_median": float(np.median(d)), "distance_max": float(np.max(d))}
+def evaluation_observations(env_id: str, count: int) -> list[np.ndarray]:
+    """``count`` first observations of the final evaluation set's episodes."""
+    if domains.is_dribbling(env_id):
+        from robocup_dribble import DribbleVecEnv
+
+        env = DribbleVecEnv(count, profile=domains.ENV_PROFILES[env_id])
+        env.seed(FINAL_SEED)
+        return list(env.reset())
+    platform = domains.platform_env()
+    observations = [platform.reset(seed=FINAL_SEED * domains.PLATFORM_SLOT_STRIDE + j)[0] for j in range(count)]
+    platform.close()
+    return observations
 
 
-def report_summary(report: DribbleReport) -> dict[str, float]:
-    d = report.distances
-    return {
-        "episodes": len(d),
-        **distance_stats(d),
-        "reach20_share": report.share_reaching(REACH_METRES),
-        "ball_loss_rate": report.loss_rate,
-    }
-
-
-def predict_microseconds(policy: Any, profile: str, calls: int = PREDICT_CALLS) -> float:
+def predict_microseconds(policy: Any, env_id: str, calls: int = PREDICT_CALLS) -> float:
     """Median wall time of ``policy.predict`` on one observation (deterministic), in microseconds."""
-    env = DribbleVecEnv(calls, profile=profile)
-    env.seed(FINAL_SEED)
-    observations = env.reset()
+    observations = evaluation_observations(env_id, calls)
     policy.predict(observations[0], deterministic=True)  # warm-up (lazy setup, caches)
     times = []
     for obs in observations:
@@ -47,22 +42,23 @@ def predict_microseconds(policy: Any, profile: str, calls: int = PREDICT_CALLS) 
     return statistics.median(times) / 1e3
 
 
-class DribbleEvalCallback(BaseCallback):
-    """Every ``eval_every`` training episodes: greedy metres on a fixed evaluation set, to the logger and a curve.
+class EvalCallback(BaseCallback):
+    """Every ``eval_every`` training episodes: the greedy score on a fixed evaluation set, to the logger and a curve.
 
-    Episodes are counted from the ``dones`` of each ``env.step`` (SarsaAAC's and SB3's on-/off-policy loops all
-    expose them), so the same callback serves every algorithm. The first point is taken before training.
+    Episodes are counted from the ``dones`` of each ``env.step`` (SarsaAAC's, P-DQN's and SB3's loops all expose
+    them), so the same callback serves every algorithm. The first point is taken before training. Curve points carry
+    the summary of :func:`benchmarks.domains.summarize` without the per-episode scores.
 
-    :param policy: what ``evaluate_dribbling`` calls ``predict`` on (the model, or an adapter around it)
-    :param profile: the env's server profile
+    :param policy: what :func:`benchmarks.domains.evaluate` calls ``predict`` on (the model, or an adapter around it)
+    :param env_id: the env the policy is scored on
     :param eval_every: training episodes between evaluations
     :param n_episodes: greedy episodes per evaluation
-    :param seed: the evaluation seed (the same players, starts and noise at every point)
+    :param seed: the evaluation set (the same episodes at every point and for every policy)
     """
 
-    def __init__(self, policy: Any, profile: str, eval_every: int, n_episodes: int, seed: int = EVAL_SEED):
+    def __init__(self, policy: Any, env_id: str, eval_every: int, n_episodes: int, seed: int = EVAL_SEED):
         super().__init__()
-        self.policy, self.profile = policy, profile
+        self.policy, self.env_id = policy, env_id
         self.eval_every, self.n_episodes, self.seed = eval_every, n_episodes, seed
         self.episodes = 0
         self.next_eval = eval_every
@@ -83,19 +79,20 @@ class DribbleEvalCallback(BaseCallback):
 
     def evaluate(self) -> dict[str, Any]:
         start = time.perf_counter()
-        summary = report_summary(evaluate_dribbling(self.policy, self.n_episodes, self.profile, self.seed))
+        summary = domains.evaluate(self.env_id, self.policy, self.n_episodes, self.seed)
         self.eval_seconds += time.perf_counter() - start
         wall = time.perf_counter() - self._start
+        scores = {k: v for k, v in summary.items() if k not in ("episodes", "episode_scores")}
         point = {
             "episodes": self.episodes,
             "env_steps": int(self.num_timesteps),
             "wall_s": round(wall, 3),
             "train_s": round(wall - self.eval_seconds, 3),  # training time only, evaluations excluded
-            **{k: v for k, v in summary.items() if k != "episodes"},
+            **scores,
         }
         self.curve.append(point)
-        for key in ("distance_mean", "distance_median", "distance_max", "reach20_share", "ball_loss_rate"):
-            self.logger.record(f"eval/{key}", point[key])
+        for key, value in scores.items():
+            self.logger.record(f"eval/{key}", value)
         self.logger.record("eval/training_episodes", self.episodes)
         self.logger.dump(self.num_timesteps)
         return point

@@ -27,14 +27,30 @@ import robocup_dribble  # noqa: E402, F401  (registers the env ids)
 from benchmarks import cells  # noqa: E402
 from benchmarks.cells import atomic_write_json, atomic_write_text, cell_lock, remove_stale_temporaries, save_model_atomic  # noqa: E402
 from benchmarks.engines import CellEngine  # noqa: E402
-from benchmarks.evaluation import DribbleEvalCallback, predict_microseconds, report_summary  # noqa: E402
+from benchmarks import domains  # noqa: E402
+from benchmarks.evaluation import EvalCallback, predict_microseconds  # noqa: E402
 from benchmarks.platform_info import loadavg, machine, versions  # noqa: E402
-from benchmarks.presets import BASELINES, EVAL_SEED, FINAL_SEED, ON_POLICY, SARSA_CONFIGS, SARSA_N_ENVS, Cell  # noqa: E402
+from benchmarks.presets import (  # noqa: E402
+    BASELINES,
+    EVAL_SEED,
+    FINAL_SEED,
+    ON_POLICY,
+    PEERS,
+    SARSA_CONFIGS,
+    SARSA_N_ENVS,
+    Cell,
+)
 from benchmarks.provenance import cell_provenance  # noqa: E402
-from robocup_dribble import DribbleVecEnv  # noqa: E402
-from robocup_dribble.evaluation import evaluate_dribbling, running_ceiling  # noqa: E402
+from benchmarks.zoo_hyperparams import settings  # noqa: E402
+from robocup_dribble.evaluation import running_ceiling  # noqa: E402
 
 PARENT_POLL_SECONDS = 0.2  # how often a worker checks that the driver still lives
+
+
+def peer_settings(cell: Cell) -> dict[str, Any]:
+    """P-DQN / MP-DQN constructor arguments: ``hyperparams/<algo>.yml``'s entry, then :data:`PEERS`, then overrides."""
+    spec = PEERS[cell.algo]
+    return {**settings(cell.algo.lower(), cell.env_id), "n_envs": spec["n_envs"], **spec["kwargs"], **cell.overrides}
 
 
 def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
@@ -44,10 +60,20 @@ def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
 
         _, policy, policy_kwargs = SARSA_CONFIGS[cell.config]
         overrides = dict(cell.overrides)
-        n_envs = overrides.pop("n_envs", SARSA_N_ENVS)
-        env = DribbleVecEnv(n_envs, profile=cell.profile)
+        env = domains.train_env(cell.env_id, overrides.pop("n_envs", SARSA_N_ENVS), cell.seed)
+        if not domains.is_dribbling(cell.env_id):
+            overrides.setdefault("info_keywords", ())
         model = SarsaAAC(policy, env, seed=cell.seed, policy_kwargs=dict(policy_kwargs), **overrides)
         return model, model, 100  # dump the rollout/train keys every 100 episodes
+    if cell.algo in PEERS:
+        from sb3_aac import MPDQN, PDQN
+
+        kwargs = peer_settings(cell)
+        env = domains.train_env(cell.env_id, kwargs.pop("n_envs"), cell.seed)
+        if not domains.is_dribbling(cell.env_id):
+            kwargs.setdefault("info_keywords", ())
+        model = {"PDQN": PDQN, "MPDQN": MPDQN}[cell.algo]("MlpPolicy", env, seed=cell.seed, device="cpu", **kwargs)
+        return model, model, 100
     from benchmarks.adapters import adapter_for, build_baseline
 
     model = build_baseline(cell.env_id, cell.algo, cell.seed, cell.overrides)
@@ -69,35 +95,42 @@ def algo_config(cell: Cell) -> dict[str, Any]:
         }
     if cell.algo == "Reference":
         return {}
+    if cell.algo in PEERS:
+        return {"policy": "MlpPolicy", "kwargs": peer_settings(cell), "other": f"hyperparams/{cell.algo.lower()}.yml"}
     spec = BASELINES[cell.algo]
     return {"policy": "MlpPolicy", **spec, "kwargs": {**spec["kwargs"], **cell.overrides}, "other": "SB3 defaults"}
 
 
 def run_reference(cell: Cell) -> dict[str, Any]:
-    """The no-learning references of an env: the hand-coded dribbler and the physical running ceiling."""
+    """The no-learning references of a dribbling env on the benchmark's evaluation episodes: the hand-coded dribbler
+    and the per-episode running bound."""
     from robocup_dribble.dribbler import HandCodedDribbler
 
     start = time.perf_counter()
     dribbler = HandCodedDribbler(profile=cell.profile)
-    curve_set = report_summary(evaluate_dribbling(dribbler, cell.eval_episodes, cell.profile, EVAL_SEED))
-    final = report_summary(evaluate_dribbling(dribbler, cell.final_episodes, cell.profile, FINAL_SEED))
+    curve_set = domains.evaluate(cell.env_id, dribbler, cell.eval_episodes, EVAL_SEED)
+    final = domains.evaluate(cell.env_id, dribbler, cell.final_episodes, FINAL_SEED)
     handcoded_s = time.perf_counter() - start
-    ceiling = running_ceiling(cell.profile)
     return {
         "handcoded": {
             "eval": curve_set,
             "final": final,
-            "predict_us": predict_microseconds(dribbler, cell.profile),
+            "predict_us": predict_microseconds(dribbler, cell.env_id),
             "wall_s": round(handcoded_s, 3),
         },
-        "ceiling": {
-            "players": len(ceiling),
-            "mean": float(np.mean(ceiling)),
-            "median": float(np.median(ceiling)),
-            "min": float(np.min(ceiling)),
-            "max": float(np.max(ceiling)),
-            "cycles": 35,
-        },
+        "ceiling": ceiling_summary(cell),
+    }
+
+
+def ceiling_summary(cell: Cell) -> dict[str, Any]:
+    ceiling = running_ceiling(cell.profile)
+    return {
+        "players": len(ceiling),
+        "mean": float(np.mean(ceiling)),
+        "median": float(np.median(ceiling)),
+        "min": float(np.min(ceiling)),
+        "max": float(np.max(ceiling)),
+        "cycles": 35,
     }
 
 
@@ -129,14 +162,15 @@ def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
         shutil.rmtree(tb_dir, ignore_errors=True)  # a run interrupted before its cell file was written
         model, policy, log_interval = build_model(cell)
         model.set_logger(configure(str(tb_dir), ["tensorboard"]))
-        callback = DribbleEvalCallback(policy, cell.profile, cell.eval_every, cell.eval_episodes)
+        callback = EvalCallback(policy, cell.env_id, cell.eval_every, cell.eval_episodes)
         model.learn(cell.budget, callback=callback, log_interval=log_interval)
         if callback.curve[-1]["env_steps"] < model.num_timesteps:
             callback.evaluate()  # the curve ends where training ended
         train_wall = time.perf_counter() - start
-        final = report_summary(evaluate_dribbling(policy, cell.final_episodes, cell.profile, FINAL_SEED))
-        for key in ("distance_mean", "reach20_share", "ball_loss_rate"):
-            model.logger.record(f"eval/final_{key}", final[key])
+        final = domains.evaluate(cell.env_id, policy, cell.final_episodes, FINAL_SEED)
+        for key, value in final.items():
+            if key not in ("episodes", "episode_scores"):
+                model.logger.record(f"eval/final_{key}", value)
         model.logger.dump(model.num_timesteps)
         model.logger.close()
         model_path = out_dir / "models" / f"{cell.cell_id}.zip"
@@ -148,7 +182,7 @@ def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
             episodes=callback.episodes,
             train_wall_s=round(train_wall, 3),
             eval_wall_s=round(callback.eval_seconds, 3),
-            predict_us=predict_microseconds(policy, cell.profile),
+            predict_us=predict_microseconds(policy, cell.env_id),
             model=str(model_path.relative_to(out_dir)),
             tensorboard=str(tb_dir.relative_to(out_dir)),
         )
@@ -214,7 +248,7 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 
 def estimated_cost(cell: Cell) -> float:
     """Rough seconds of a cell (to start the longest first, so two workers finish together)."""
-    rate = {"SarsaAAC": 10000, "PPO": 1600, "A2C": 2000, "SAC": 1000, "TD3": 1300, "DDPG": 1300, "DQN": 1800}
+    rate = {"SarsaAAC": 5000, "PPO": 1600, "A2C": 2000, "SAC": 250, "TD3": 400, "DDPG": 450, "DQN": 900, "PDQN": 350, "MPDQN": 300}
     return 30.0 if cell.algo == "Reference" else cell.budget / rate.get(cell.algo, 1000)
 
 
@@ -223,10 +257,9 @@ def _summary_line(result: dict[str, Any]) -> str:
         ref = result["references"]
         return f"hand-coded {ref['handcoded']['final']['distance_mean']:.1f} m, ceiling {ref['ceiling']['mean']:.1f} m"
     f = result["final"]
-    return (
-        f"{f['distance_mean']:.1f} m, >=20 m {100 * f['reach20_share']:.0f}%, lost {100 * f['ball_loss_rate']:.0f}% "
-        f"({result['episodes']} episodes, {result['wall_s']:.0f} s)"
-    )
+    env_id = result["cell"]["env_id"]
+    score = f"{f[domains.metric(env_id)]:.3g} ({domains.metric_label(env_id)})"
+    return f"{score} ({result['episodes']} episodes, {result['wall_s']:.0f} s)"
 
 
 def run_grid(

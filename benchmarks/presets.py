@@ -1,19 +1,26 @@
-"""The benchmark grid: cells = env id x algorithm x approximator config x seed x budget.
+"""The benchmark grid: cells = env id x algorithm x config x seed x budget.
 
 Every number here is our choice; the reasons are next to them. A cell is plain data (:class:`Cell`), so it can be
 sent to a worker process and written into its result file as is.
 
-SarsaAAC configs are the paper's three families (Uc-Cetina 2013, Figs. 5-7), all other hyperparameters at the
-SarsaAAC defaults (16 lanes of ``DribbleVecEnv``):
+Three domains (:mod:`benchmarks.domains`): the dribbling envs of both server eras and Platform-v0 (PyPI
+``hybrid-platform``, Masson et al.'s Platform), each with its own budget.
 
+SarsaAAC configs (:data:`SARSA_CONFIGS`): the recommended ``TilePolicy`` with its defaults, and the paper's three
+families (Uc-Cetina 2013, Figs. 5-7), all other hyperparameters at the SarsaAAC defaults (16 lanes):
+
+* ``tile``: ``TilePolicy`` (hashed tilings over the inputs and their pairs; the README's recommendation);
 * ``mlp2/10/20``: ``MlpPolicy`` with 2, 10, 20 hidden tanh units per approximator;
 * ``rbfmlp2/10/20``: ``RbfMlpPolicy``, a filter layer of 10 Gaussian RBFs per input, then 2, 10, 20 hidden units;
 * ``rbf10/30/50``: ``RbfPolicy``, arrays of 10, 30, 50 Gaussian RBFs per input, linear output.
 
-SB3 baselines (:data:`BASELINES`) train on the same env ids for the same number of env steps, through
-:class:`~sb3_aac.FlattenParameterizedAction` (PPO, A2C, SAC, TD3, DDPG: ``Box(11)``) or
-:class:`~sb3_aac.DiscretizeParameterizedAction` (DQN: ``Discrete(80)``, 5 values per parameter). Their
-hyperparameters are SB3's defaults except where :data:`BASELINES` says otherwise, and why.
+Parameterized-action peers (:data:`PEERS`): P-DQN and MP-DQN with the settings of ``hyperparams/<algo>.yml``.
+SB3 baselines (:data:`BASELINES`) through :class:`~sb3_aac.FlattenParameterizedAction` (PPO, A2C, SAC, TD3, DDPG:
+one score per action type then every parameter) or :class:`~sb3_aac.DiscretizeParameterizedAction` (DQN: 5 values
+per parameter). **Fairness rule**: every off-policy learner (SAC, TD3, DDPG, DQN, P-DQN, MP-DQN) takes one gradient
+step per transition (SB3's default for SAC/TD3/DDPG with one env; ``n_envs`` lanes and ``gradient_steps=n_envs``), and
+otherwise keeps its documented defaults (SB3's, or the reference MP-DQN code's); none is tuned for these tasks, and
+neither is SarsaAAC (its defaults were chosen on several tasks, see its docstring).
 """
 
 from __future__ import annotations
@@ -24,19 +31,23 @@ from typing import Any
 
 from robocup_dribble import ENV_PROFILES
 
-ENV_IDS = ("RoboCupDribblePaper-v0", "RoboCupDribble-v0")
-ENV_SHORT = {"RoboCupDribblePaper-v0": "paper", "RoboCupDribble-v0": "v19"}
+DRIBBLE_IDS = ("RoboCupDribblePaper-v0", "RoboCupDribble-v0")  # the paper's era first
+PLATFORM_ID = "Platform-v0"
+ENV_IDS = (*DRIBBLE_IDS, PLATFORM_ID)
+ENV_SHORT = {"RoboCupDribblePaper-v0": "paper", "RoboCupDribble-v0": "v19", PLATFORM_ID: "platform"}
 
-# Evaluation seeds of evaluate_dribbling: the same players, starts and noise for every cell of an env, and none of
-# them shared with training (training seeds are small integers) or with each other.
+# Evaluation seeds: with common random numbers every policy meets the same episodes of a set (episode slot j of a
+# set plays its own seeded player, start and noise, or Platform's own seeded episode), and none of them is shared with
+# training (training seeds are small integers) or with another set.
 EVAL_SEED = 10_000  # the learning curves: `eval_episodes` greedy episodes every `eval_every` training episodes
 FINAL_SEED = 20_000  # the final evaluation of a trained model (`final_episodes` greedy episodes)
 RELIABILITY_SEED = 30_000  # the reliability test (10,000 fresh players, one episode each)
 
-SARSA_N_ENVS = 16  # DribbleVecEnv lanes for SarsaAAC (the README's setting)
+SARSA_N_ENVS = 16  # lanes for SarsaAAC (the README's setting)
 
 # name: (family, policy, policy_kwargs)
 SARSA_CONFIGS: dict[str, tuple[str, str, dict[str, Any]]] = {
+    "tile": ("Tiles", "TilePolicy", {}),
     "mlp2": ("MLP", "MlpPolicy", {"hidden_units": 2}),
     "mlp10": ("MLP", "MlpPolicy", {"hidden_units": 10}),
     "mlp20": ("MLP", "MlpPolicy", {"hidden_units": 20}),
@@ -47,8 +58,10 @@ SARSA_CONFIGS: dict[str, tuple[str, str, dict[str, Any]]] = {
     "rbf30": ("RBF", "RbfPolicy", {"n_rbf": 30}),
     "rbf50": ("RBF", "RbfPolicy", {"n_rbf": 50}),
 }
-FAMILIES = ("MLP", "MLP+RBF", "RBF")
+FAMILIES = ("Tiles", "MLP", "MLP+RBF", "RBF")  # SarsaAAC's
+PAPER_FAMILIES = ("MLP", "MLP+RBF", "RBF")
 CONFIG_LABELS = {
+    "tile": "SarsaAAC tiles (recommended)",
     "mlp2": "MLP (2 hidden)",
     "mlp10": "MLP (10 hidden)",
     "mlp20": "MLP (20 hidden)",
@@ -60,55 +73,52 @@ CONFIG_LABELS = {
     "rbf50": "RBF arrays (50/input)",
 }
 
+# The off-policy learners' lanes: one gradient step per transition means gradient_steps = n_envs with train_freq=1.
+OFF_POLICY_ENVS = 4
+REPLAY_RATIO_ONE = {"train_freq": 1, "gradient_steps": OFF_POLICY_ENVS}
+
+# P-DQN / MP-DQN: hyperparams/<algo>.yml's entry for the env, with n_envs and gradient steps set by the fairness rule
+# (the reference MP-DQN code also takes one update per env step).
+PEERS: dict[str, dict[str, Any]] = {
+    "PDQN": {"n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE)},
+    "MPDQN": {"n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE)},
+}
+
 # The small net every baseline uses: SB3's default for PPO, A2C and DQN. SAC/TD3/DDPG default to 256x256 and
 # 400x300; we give them 64x64 too, so the baselines compare algorithms rather than net sizes, and because a
-# gradient step of the big nets costs 2-3x more on one core (SAC 256x256 ran at ~250 env steps/s here, 64x64 at
-# ~500). SarsaAAC's approximators are far smaller (at most 20 hidden units), so 64x64 is no capacity handicap.
+# gradient step of the big nets costs 2-3x more on one core. SarsaAAC's approximators are far smaller, and P-DQN's
+# nets are 64x64 (dribbling) or 128 (Platform, the reference code's), so 64x64 is no capacity handicap.
 BASELINE_NET = [64, 64]
 
 # algo: wrapper ("flatten" or "discretize"), n_envs, SB3 keyword arguments (JSON-able; see adapters.build_baseline).
-# Every baseline steps its n_envs lanes as one batched DribbleVecEnv behind the wrapper's action space
-# (adapters.WrappedDribbleVecEnv: the same actions and physics as DummyVecEnv over the wrapped DribbleEnv, without
-# its ~100-400 us of Python per transition, which was half of A2C's and PPO's training time).
 BASELINES: dict[str, dict[str, Any]] = {
-    # On-policy: 8 DummyVecEnv envs. PPO keeps SB3's 2048 transitions per rollout (8 x 256) and takes minibatches
-    # of 256 instead of 64 (4x fewer gradient steps per rollout; 64 made PPO the slowest on-policy cell).
+    # On-policy: 8 lanes. PPO keeps SB3's 2048 transitions per rollout (8 x 256) and takes minibatches of 256 instead
+    # of 64 (4x fewer gradient steps per rollout; 64 made PPO the slowest on-policy cell).
     "PPO": {"wrapper": "flatten", "n_envs": 8, "kwargs": {"n_steps": 256, "batch_size": 256}},
     # A2C: SB3 defaults (n_steps=5, i.e. 40 transitions per update with 8 envs).
     "A2C": {"wrapper": "flatten", "n_envs": 8, "kwargs": {}},
-    # Off-policy: SB3's defaults take one gradient step per env step with one env, ~250-500 env steps/s on this
-    # machine (5-10 min per 150k-step cell, 30 such cells), too slow for the time box at SarsaAAC's step budget.
-    # With 16 envs and train_freq=1 they take one gradient step per 16 transitions (a replay ratio of 1/16 instead
-    # of 1). That is a handicap in sample efficiency we state in the report; it keeps the number of env steps equal
-    # to SarsaAAC's.
+    # Off-policy: one gradient step per transition (SB3's default ratio for SAC/TD3/DDPG), SB3's learning_starts.
     "SAC": {
         "wrapper": "flatten",
-        "n_envs": 16,
-        "kwargs": {"train_freq": 1, "gradient_steps": 1, "learning_starts": 1000, "policy_kwargs": {"net_arch": BASELINE_NET}},
+        "n_envs": OFF_POLICY_ENVS,
+        "kwargs": {**REPLAY_RATIO_ONE, "policy_kwargs": {"net_arch": BASELINE_NET}},
     },
     # TD3 and DDPG have no exploration noise by default in SB3: Gaussian noise of 0.1 on the [-1, 1] actions
     # (the RL Zoo's usual choice).
     "TD3": {
         "wrapper": "flatten",
-        "n_envs": 16,
-        "kwargs": {"train_freq": 1, "gradient_steps": 1, "learning_starts": 1000, "policy_kwargs": {"net_arch": BASELINE_NET}},
+        "n_envs": OFF_POLICY_ENVS,
+        "kwargs": {**REPLAY_RATIO_ONE, "policy_kwargs": {"net_arch": BASELINE_NET}},
         "action_noise_sigma": 0.1,
     },
     "DDPG": {
         "wrapper": "flatten",
-        "n_envs": 16,
-        "kwargs": {"train_freq": 1, "gradient_steps": 1, "learning_starts": 1000, "policy_kwargs": {"net_arch": BASELINE_NET}},
+        "n_envs": OFF_POLICY_ENVS,
+        "kwargs": {**REPLAY_RATIO_ONE, "policy_kwargs": {"net_arch": BASELINE_NET}},
         "action_noise_sigma": 0.1,
     },
-    # DQN over 80 discrete actions (5 values per parameter: dash directions -180/-90/0/90/180 deg, kick speeds
-    # 0..max in quarters, ...). 8 envs, one gradient step per 8 transitions (SB3's default is one per 4 with one
-    # env); learning_starts 1000 instead of 100 so the first updates see more than a few episodes.
-    "DQN": {
-        "wrapper": "discretize",
-        "bins": 5,
-        "n_envs": 8,
-        "kwargs": {"train_freq": 1, "gradient_steps": 1, "learning_starts": 1000},
-    },
+    # DQN over the grid of 5 values per parameter; one gradient step per transition (SB3's default is one per 4).
+    "DQN": {"wrapper": "discretize", "bins": 5, "n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE)},
 }
 ON_POLICY = ("PPO", "A2C")
 
@@ -138,11 +148,14 @@ class Cell:
     def family(self) -> str:
         if self.algo == "SarsaAAC":
             return SARSA_CONFIGS[self.config][0]
+        if self.algo in PEERS:
+            return "peer"
         return "reference" if self.algo == "Reference" else "baseline"
 
     @property
-    def profile(self) -> str:
-        return ENV_PROFILES[self.env_id]
+    def profile(self) -> str | None:
+        """The dribbling env's server profile (None for other domains)."""
+        return ENV_PROFILES.get(self.env_id)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -167,35 +180,60 @@ def config_label(algo: str, config: str) -> str:
 # Presets
 # ---------------------------------------------------------------------------------------------------------------------
 
-# quick: CI-sized. The paper env, 2 seeds, the paper's best SarsaAAC family and its MLP, one baseline; tiny budgets.
-QUICK = {
-    "env_ids": ("RoboCupDribblePaper-v0",),
-    "seeds": (0, 1),
-    "sarsa_configs": ("rbf10", "mlp2"),
-    "baselines": ("PPO",),
-    "sarsa_budget": 20_000,
-    "baseline_budget": 20_000,
-    "baseline_seeds": (0, 1),
+# A preset: per env id, its budget (env steps, the same for every algorithm of the env), and runs: (algo, config, seeds).
+# The evaluation sizes are shared by all envs of a preset.
+
+# quick: CI-sized. The paper env, 2 seeds, the recommended SarsaAAC policy, the paper's MLP, one baseline.
+QUICK: dict[str, Any] = {
+    "envs": {
+        "RoboCupDribblePaper-v0": {
+            "budget": 20_000,
+            "runs": [("SarsaAAC", "tile", (0, 1)), ("SarsaAAC", "mlp2", (0, 1)), ("PPO", "ppo", (0, 1))],
+        }
+    },
     "eval_every": 500,
     "eval_episodes": 100,
     "final_episodes": 300,
 }
 
-# full: both envs, every SarsaAAC config with 5 seeds, the 6 baselines with 3 seeds, all at 150k env steps (SarsaAAC
-# RbfPolicy reaches ~21-22 m there, ~9,000-11,000 episodes). Measured on the 2-core development machine with 2
-# workers while other jobs kept its load average at 2-3: a SarsaAAC cell 15-45 s (90 cells); baseline cells at 150k
-# steps PPO 130 s, SAC 197 s, the others ~100-150 s (36 cells); ~7,000 worker-seconds in all, i.e. ~60 min with 2
-# workers under that load, ~40-45 min on two free cores. Evaluations every 1,000 episodes (~10 points for RBF
-# arrays, more for configs and baselines with short episodes) cost under ~10% of a cell.
-FULL = {
-    "env_ids": ENV_IDS,
-    "seeds": (0, 1, 2, 3, 4),
-    "sarsa_configs": tuple(SARSA_CONFIGS),
-    "baselines": tuple(BASELINES),
-    "sarsa_budget": 150_000,
-    "baseline_budget": 150_000,
-    "baseline_seeds": (0, 1, 2),
-    "eval_every": 1000,
+HEADLINE_SEEDS = tuple(range(10))  # the best of each family on each env: >= 10 seeds (benchmarks.significance)
+FEW_SEEDS = tuple(range(3))
+PAPER_SEEDS = tuple(range(5))
+
+# full: sized for about an hour and a half of a 2-core machine (measured per cell: one gradient step costs ~2-3 ms
+# on one core, so an off-policy cell of 50k steps takes ~2-3 min; SarsaAAC cells take seconds). Headline pairs: the
+# recommended SarsaAAC policy, MP-DQN (the parameterized peer users would pick; P-DQN with fewer seeds) and TD3 (the
+# best wrapped SB3 baseline of the first benchmark on both dribbling envs) with 10 seeds; the paper's configs with 5;
+# the other baselines with 3. Budgets: 50k env steps on dribbling (~3,500 SarsaAAC episodes), 20k on Platform.
+_DRIBBLE_RUNS = [
+    ("SarsaAAC", "tile", HEADLINE_SEEDS),
+    ("MPDQN", "mpdqn", HEADLINE_SEEDS),
+    ("TD3", "td3", HEADLINE_SEEDS),
+]
+FULL: dict[str, Any] = {
+    "envs": {
+        "RoboCupDribblePaper-v0": {
+            "budget": 50_000,
+            "runs": [
+                *_DRIBBLE_RUNS,
+                *(("SarsaAAC", config, PAPER_SEEDS) for config in ("rbf50", "rbfmlp2", "mlp2")),
+                ("PDQN", "pdqn", FEW_SEEDS),
+                *((algo, algo.lower(), FEW_SEEDS) for algo in ("SAC", "DDPG", "DQN", "PPO", "A2C")),
+            ],
+        },
+        "RoboCupDribble-v0": {"budget": 50_000, "runs": _DRIBBLE_RUNS},
+        PLATFORM_ID: {
+            "budget": 20_000,
+            "runs": [
+                ("SarsaAAC", "tile", HEADLINE_SEEDS),
+                ("MPDQN", "mpdqn", HEADLINE_SEEDS),
+                ("PDQN", "pdqn", FEW_SEEDS),
+                ("TD3", "td3", FEW_SEEDS),
+                ("PPO", "ppo", FEW_SEEDS),
+            ],
+        },
+    },
+    "eval_every": 500,
     "eval_episodes": 100,
     "final_episodes": 1000,
 }
@@ -209,13 +247,12 @@ def build_cells(preset: str | dict[str, Any]) -> list[Cell]:
     common = {"eval_every": p["eval_every"], "eval_episodes": p["eval_episodes"], "final_episodes": p["final_episodes"]}
     cells = [
         Cell(env_id, "Reference", "references", final_episodes=p["final_episodes"], eval_episodes=p["eval_episodes"])
-        for env_id in p["env_ids"]
+        for env_id in p["envs"]
+        if env_id in ENV_PROFILES  # Platform's references are published figures (benchmarks.domains)
     ]
-    for env_id in p["env_ids"]:
-        for config in p["sarsa_configs"]:
-            cells += [Cell(env_id, "SarsaAAC", config, seed, p["sarsa_budget"], **common) for seed in p["seeds"]]
-        for algo in p["baselines"]:
-            cells += [Cell(env_id, algo, algo.lower(), seed, p["baseline_budget"], **common) for seed in p["baseline_seeds"]]
+    for env_id, spec in p["envs"].items():
+        for algo, config, seeds in spec["runs"]:
+            cells += [Cell(env_id, algo, config, seed, spec["budget"], **common) for seed in seeds]
     return cells
 
 

@@ -14,7 +14,7 @@ import torch as th
 
 from benchmarks import cells
 from benchmarks.cells import atomic_write_json
-from benchmarks.evaluation import distance_stats
+from benchmarks.domains import distance_stats
 from benchmarks.presets import BASELINES, RELIABILITY_SEED, Cell
 from robocup_dribble import ENV_PROFILES
 from robocup_dribble.evaluation import reliability_test
