@@ -248,7 +248,17 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 
 def estimated_cost(cell: Cell) -> float:
     """Rough seconds of a cell (to start the longest first, so two workers finish together)."""
-    rate = {"SarsaAAC": 5000, "PPO": 1600, "A2C": 2000, "SAC": 250, "TD3": 400, "DDPG": 450, "DQN": 900, "PDQN": 350, "MPDQN": 300}
+    rate = {
+        "SarsaAAC": 5000,
+        "PPO": 1600,
+        "A2C": 2000,
+        "SAC": 250,
+        "TD3": 400,
+        "DDPG": 450,
+        "DQN": 900,
+        "PDQN": 350,
+        "MPDQN": 300,
+    }
     return 30.0 if cell.algo == "Reference" else cell.budget / rate.get(cell.algo, 1000)
 
 
