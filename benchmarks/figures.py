@@ -8,10 +8,14 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks import domains
 from benchmarks.groups import Group, best_group, budget_note, iqm_ci, scalar_ci
 from benchmarks.presets import FAMILIES
 
 COLORS = {
+    "tile": "#d62728",
+    "pdqn": "#2ca02c",
+    "mpdqn": "#006d2c",
     "mlp2": "#9ecae1",
     "mlp10": "#4292c6",
     "mlp20": "#08306b",
@@ -50,6 +54,7 @@ def env_short(env_id: str) -> str:
     return {
         "RoboCupDribblePaper-v0": "RoboCupDribblePaper-v0 (v11 physics)",
         "RoboCupDribble-v0": "RoboCupDribble-v0 (v19 physics)",
+        "Platform-v0": "Platform-v0",
     }.get(env_id, env_id)
 
 
@@ -85,19 +90,25 @@ def _plot_group(ax, group: Group, x: str, label: str | None = None) -> None:
         ax.fill_between(grid, low, high, color=color_of(group), alpha=0.2, lw=0)
 
 
-def _references(ax, reference: dict[str, Any] | None, legend: bool = True) -> None:
+def _references(ax, env_id: str, reference: dict[str, Any] | None, legend: bool = True) -> None:
+    """Horizontal reference lines: the hand-coded dribbler and the ceiling row's figure, or Platform's published ones."""
+    if not domains.is_dribbling(env_id):
+        for (name, value, _), style in zip(domains.PLATFORM_REFERENCES, ("--", ":", "-.", (0, (1, 3))), strict=True):
+            ax.axhline(value, color="0.3", ls=style, lw=1.1, label=f"{name}, published ({value:.3g})" if legend else None)
+        return
     if reference is None:
         return
     ref = reference["references"]
     hand = ref["handcoded"]["final"]["distance_mean"]
     ceiling = ref["ceiling"]["mean"]
+    label = ref["ceiling"].get("label", "running ceiling, no ball")
     ax.axhline(hand, color="black", ls="--", lw=1.2, label=f"hand-coded dribbler ({hand:.1f} m)" if legend else None)
-    ax.axhline(ceiling, color="0.45", ls=":", lw=1.5, label=f"running ceiling, no ball ({ceiling:.1f} m)" if legend else None)
+    ax.axhline(ceiling, color="0.45", ls=":", lw=1.5, label=f"{label} ({ceiling:.1f} m)" if legend else None)
 
 
-def _axes_style(ax, xlabel: str, ymax: float) -> None:
+def _axes_style(ax, env_id: str, xlabel: str, ymax: float) -> None:
     ax.set_xlabel(xlabel)
-    ax.set_ylabel("greedy dribble distance (m)")
+    ax.set_ylabel("greedy dribble distance (m)" if domains.is_dribbling(env_id) else "greedy mean return")
     ax.set_ylim(0, ymax)
     ax.xaxis.set_major_formatter(_thousands())
 
@@ -109,6 +120,8 @@ def _thousands():
 
 
 def _ymax(references: dict[str, Any], env_ids: list[str], groups: list[Group]) -> float:
+    if not any(domains.is_dribbling(e) for e in env_ids):
+        return 1.05
     top = [r["references"]["ceiling"]["mean"] for e, r in references.items() if e in env_ids]
     top += [float(np.max(g.curve()[1])) for g in groups]
     return max([25.0, *top]) * 1.08
@@ -116,7 +129,7 @@ def _ymax(references: dict[str, Any], env_ids: list[str], groups: list[Group]) -
 
 def family_figure(out: Path, family: str, groups: dict[str, list[Group]], references: dict[str, Any]) -> str | None:
     plt = _plt()
-    env_ids = [e for e, gs in groups.items() if any(g.family == family for g in gs)]
+    env_ids = [e for e, gs in groups.items() if any(g.family == family for g in gs) and domains.is_dribbling(e)]
     if not env_ids:
         return None
     name, paper_fig = FAMILY_FIGURES[family]
@@ -125,8 +138,8 @@ def family_figure(out: Path, family: str, groups: dict[str, list[Group]], refere
         fam = [g for g in groups[env_id] if g.family == family]
         for g in fam:
             _plot_group(ax, g, "episodes")
-        _references(ax, references.get(env_id))
-        _axes_style(ax, "training episodes", _ymax(references, [env_id], fam))
+        _references(ax, env_id, references.get(env_id))
+        _axes_style(ax, env_id, "training episodes", _ymax(references, [env_id], fam))
         ax.set_title(f"{env_short(env_id)}\n{budget_note(fam)}", fontsize=10)
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2, frameon=False)
     fig.suptitle(f"{FAMILY_TITLES[family]} (cf. paper {paper_fig})\nIQM over seeds with 95% bootstrap CI", fontsize=12)
@@ -141,19 +154,23 @@ def best_figure(out: Path, groups: dict[str, list[Group]], references: dict[str,
     env_ids = [e for e, gs in groups.items() if gs]
     if not env_ids:
         return None
-    fig, axes = plt.subplots(len(env_ids), 2, figsize=(13, 4.6 * len(env_ids)), squeeze=False)
+    axes_x = (("episodes", "training episodes"), ("env_steps", "training env steps"), ("train_s", "training seconds"))
+    fig, axes = plt.subplots(len(env_ids), 3, figsize=(19, 4.6 * len(env_ids)), squeeze=False)
     for row, env_id in enumerate(env_ids):
         chosen = [g for f in FAMILIES if (g := best_group(groups[env_id], ("SarsaAAC",), f)) is not None]
         chosen += [g for g in groups[env_id] if g.algo != "SarsaAAC"]
-        for col, (x, xlabel) in enumerate((("episodes", "training episodes"), ("env_steps", "training env steps"))):
+        for col, (x, xlabel) in enumerate(axes_x):
             ax = axes[row, col]
             for g in chosen:
-                label = f"SarsaAAC {g.label}" if g.algo == "SarsaAAC" else g.label
+                label = f"SarsaAAC {g.label}" if g.algo == "SarsaAAC" and g.family != "Tiles" else g.label
                 _plot_group(ax, g, x, label)
-            _references(ax, references.get(env_id))
-            _axes_style(ax, xlabel, _ymax(references, [env_id], chosen))
+            _references(ax, env_id, references.get(env_id))
+            _axes_style(ax, env_id, xlabel, _ymax(references, [env_id], chosen))
+            if x == "train_s":
+                ax.set_xscale("log")
+                ax.xaxis.set_major_formatter(_thousands())
             ax.set_title(f"{env_short(env_id)}: vs {xlabel.split(' ', 1)[1]}", fontsize=10.5)
-        axes[row, 1].legend(
+        axes[row, 2].legend(
             loc="center left",
             bbox_to_anchor=(1.01, 0.5),
             frameon=False,
@@ -161,7 +178,8 @@ def best_figure(out: Path, groups: dict[str, list[Group]], references: dict[str,
             title_fontsize=8.5,
         )
     fig.suptitle(
-        "Best SarsaAAC config of each family and the SB3 baselines (cf. paper Fig. 8)\nIQM over seeds with 95% bootstrap CI",
+        "Best SarsaAAC config of each family, P-DQN/MP-DQN and the SB3 baselines (cf. paper Fig. 8)\n"
+        "IQM over seeds with 95% bootstrap CI",
         fontsize=12,
     )
     fig.tight_layout()
@@ -239,19 +257,24 @@ def final_figure(out: Path, groups: dict[str, list[Group]], references: dict[str
             ax.plot(point, y, "|", color=color_of(g), ms=16, mew=2.5)
             ax.plot(finals, np.full(len(finals), y), "o", color=color_of(g), ms=3.5, mfc="white", mew=1)
         ax.set_yticks(range(len(gs)), [g.label for g in gs])
-        _references(ax, None)
         ref = references.get(env_id)
-        if ref:
+        if not domains.is_dribbling(env_id):
+            for name, value, _ in domains.PLATFORM_REFERENCES:
+                ax.axvline(value, color="0.45", ls=":", lw=1.2)
+                ax.text(value, len(gs) - 0.35, f"{name} {value:.3g} ", va="bottom", ha="right", fontsize=7.5, rotation=90)
+            ax.set_ylim(-0.6, len(gs) + 0.1)
+        elif ref:
             hand = ref["references"]["handcoded"]["final"]["distance_mean"]
             ceiling = ref["references"]["ceiling"]["mean"]
             ax.axvline(hand, color="black", ls="--", lw=1.2)
             ax.axvline(ceiling, color="0.45", ls=":", lw=1.5)
             top = len(gs) - 0.35
             ax.text(hand, top, f" hand-coded {hand:.1f} m", va="bottom", ha="left", fontsize=8.5)
-            ax.text(ceiling, top, f"running ceiling {ceiling:.1f} m ", va="bottom", ha="right", fontsize=8.5, color="0.35")
+            label = ref["references"]["ceiling"].get("label", "running ceiling")
+            ax.text(ceiling, top, f"{label} {ceiling:.1f} m ", va="bottom", ha="right", fontsize=8.5, color="0.35")
             ax.set_ylim(-0.6, len(gs) + 0.1)
-        ax.set_xlabel("final greedy dribble distance (m)")
-        ax.set_xlim(0, _ymax(references, [env_id], []) if ref else None)
+        ax.set_xlabel("final greedy dribble distance (m)" if domains.is_dribbling(env_id) else "final greedy mean return")
+        ax.set_xlim(0, _ymax(references, [env_id], []) if ref or not domains.is_dribbling(env_id) else None)
         ax.set_title(f"{env_short(env_id)}\n{budget_note(groups[env_id])}", fontsize=10)
         ax.grid(axis="y", alpha=0)
     fig.suptitle("Final greedy distance per config\n(dots: seeds; tick: IQM; band: 95% bootstrap CI)", fontsize=12)

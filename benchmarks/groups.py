@@ -12,9 +12,16 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from benchmarks.presets import BASELINES, ENV_IDS, SARSA_CONFIGS, config_label
+from benchmarks import domains
+from benchmarks.presets import BASELINES, ENV_IDS, PEERS, SARSA_CONFIGS, config_label
 from benchmarks.significance import IQM_TRIM, iqm
 
+# The three kinds of learner a user chooses between; a headline pair is the best of two kinds on one env.
+KINDS: dict[str, tuple[str, ...]] = {
+    "SarsaAAC": ("SarsaAAC",),
+    "parameterized peer": tuple(PEERS),
+    "SB3 baseline": tuple(BASELINES),
+}
 INTERVAL_RESAMPLES = 2000  # bootstrap resamples of the intervals drawn and tabulated (verdicts use significance's)
 GRID_POINTS = 80
 
@@ -25,6 +32,7 @@ class Group:
     def __init__(self, env_id: str, algo: str, config: str, budget: int, runs: list[dict[str, Any]]):
         self.env_id, self.algo, self.config, self.budget = env_id, algo, config, budget
         self.runs = sorted(runs, key=lambda r: r["cell"]["seed"])
+        self.metric = domains.metric(env_id)  # the score that ranks policies on this env
 
     @property
     def label(self) -> str:
@@ -34,22 +42,29 @@ class Group:
     def family(self) -> str:
         return self.runs[0]["family"]
 
-    def final(self, key: str = "distance_mean") -> np.ndarray:
-        return np.array([r["final"][key] for r in self.runs], dtype=float)
+    def final(self, key: str | None = None) -> np.ndarray:
+        """Per seed: the final evaluation's ``key`` (default: the env's score)."""
+        return np.array([r["final"][key or self.metric] for r in self.runs], dtype=float)
 
     def values(self, key: str) -> np.ndarray:
         return np.array([r[key] for r in self.runs], dtype=float)
 
-    def curve(self, x: str = "episodes", y: str = "distance_mean") -> tuple[np.ndarray, np.ndarray]:
-        """Grid ``(G,)`` over the x range every run reached, and the runs' interpolated values ``(runs, G)``."""
+    def curve(self, x: str = "episodes", y: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Grid ``(G,)`` over the x range every run reached, and the runs' interpolated values ``(runs, G)``
+        (``y`` default: the env's score)."""
         end = min(r["curve"][-1][x] for r in self.runs)
         grid = np.linspace(0.0, end, GRID_POINTS) if end > 0 else np.zeros(1)
-        values = np.stack([np.interp(grid, [p[x] for p in r["curve"]], [p[y] for p in r["curve"]]) for r in self.runs])
-        return grid, values
+        return grid, self.at(x, grid, y)
 
-    def first_reaching(self, metres: float) -> list[dict[str, Any] | None]:
-        """Per run: the first curve point whose greedy mean distance is at least ``metres`` (None if never)."""
-        return [next((p for p in r["curve"] if p["distance_mean"] >= metres), None) for r in self.runs]
+    def at(self, x: str, where: float | np.ndarray, y: str | None = None) -> np.ndarray:
+        """Per run (rows): the score (or ``y``) interpolated at ``where`` on the ``x`` axis of its curve (a run that
+        ended before: its last point)."""
+        key = y or self.metric
+        return np.array([np.interp(where, [p[x] for p in r["curve"]], [p[key] for p in r["curve"]]) for r in self.runs])
+
+    def first_reaching(self, threshold: float) -> list[dict[str, Any] | None]:
+        """Per run: the first curve point whose score is at least ``threshold`` (None if never)."""
+        return [next((p for p in r["curve"] if p[self.metric] >= threshold), None) for r in self.runs]
 
 
 def group_results(results: list[dict[str, Any]]) -> tuple[dict[str, list[Group]], dict[str, dict[str, Any]]]:
@@ -62,7 +77,7 @@ def group_results(results: list[dict[str, Any]]) -> tuple[dict[str, list[Group]]
             references[c["env_id"]] = r
         elif "final" in r:
             buckets[(c["env_id"], c["algo"], c["config"], c["budget"])].append(r)
-    order = {name: i for i, name in enumerate([*SARSA_CONFIGS, *(a.lower() for a in BASELINES)])}
+    order = {name: i for i, name in enumerate([*SARSA_CONFIGS, *(a.lower() for a in (*PEERS, *BASELINES))])}
     groups: dict[str, list[Group]] = defaultdict(list)
     for key in sorted(buckets, key=lambda k: (k[0], order.get(k[2], 99), k[3])):
         groups[key[0]].append(Group(*key, buckets[key]))
@@ -99,13 +114,15 @@ def scalar_ci(values: np.ndarray) -> tuple[float, float, float]:
     return float(point[0]), float(low[0]), float(high[0])
 
 
-def best_group(groups: list[Group], algos: tuple[str, ...], family: str | None = None) -> Group | None:
-    """The group with the highest IQM final distance among ``algos`` (and ``family``)."""
-    pool = [g for g in groups if g.algo in algos and (family is None or g.family == family)]
+def best_group(groups: list[Group], algos: tuple[str, ...], family: str | None = None, min_seeds: int = 0) -> Group | None:
+    """The group with the highest IQM final score among ``algos`` (and ``family``) with at least ``min_seeds`` runs."""
+    pool = [g for g in groups if g.algo in algos and (family is None or g.family == family) and len(g.runs) >= min_seeds]
     return max(pool, key=lambda g: float(iqm(g.final()))) if pool else None
 
 
 def budget_note(groups: list[Group]) -> str:
     """The groups' env-step budgets and seed counts, SarsaAAC first (a figure title, a setup line)."""
-    parts = sorted({(g.algo == "SarsaAAC", g.budget, len(g.runs)) for g in groups}, reverse=True)
-    return "; ".join(f"{'SarsaAAC' if s else 'baselines'} {b:,} env steps x {n} seeds" for s, b, n in parts)
+    parts: dict[tuple[int, int], list[str]] = defaultdict(list)
+    for g in groups:
+        parts[(g.budget, len(g.runs))].append(g.label)
+    return "; ".join(f"{b:,} env steps x {n} seeds ({', '.join(labels)})" for (b, n), labels in sorted(parts.items()))

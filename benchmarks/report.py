@@ -25,11 +25,11 @@ from typing import Any
 from benchmarks import cells
 from benchmarks.figures import FAMILY_FIGURES, FAMILY_TITLES, best_figure, family_figure, final_figure, reliability_figure
 from benchmarks.groups import group_results
-from benchmarks.presets import FAMILIES
+from benchmarks.presets import PAPER_FAMILIES
 from benchmarks.report_text import (
-    baseline_verdicts,
     cost_table,
     env_title,
+    headline_verdicts,
     method_section,
     paper_claims,
     performance_table,
@@ -66,26 +66,27 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
     results, reliability, damaged = read_inputs(out)
     groups, references = group_results(results)
     if figures:
-        family_figs = {f: family_figure(out, f, groups, references) for f in FAMILIES}
+        family_figs = {f: family_figure(out, f, groups, references) for f in PAPER_FAMILIES}
         best = best_figure(out, groups, references)
         final = final_figure(out, groups, references)
         rel_fig = reliability_figure(out, reliability) if reliability else None
     else:
         family_figs = {
-            f: FAMILY_FIGURES[f][0] if any(g.family == f for gs in groups.values() for g in gs) else None for f in FAMILIES
+            f: FAMILY_FIGURES[f][0] if any(g.family == f for gs in groups.values() for g in gs) else None
+            for f in PAPER_FAMILIES
         }
         best = "fig_best.png" if any(groups.values()) else None
         final = "fig_final.png" if best else None
         rel_fig = "fig_reliability.png" if reliability else None
 
     lines = [
-        "# Benchmark: SarsaAAC against SB3 baselines on RoboCup dribbling",
+        "# Benchmark: SarsaAAC against P-DQN, MP-DQN and SB3 baselines on RoboCup dribbling and Platform",
         "",
         f"Generated {time.strftime('%Y-%m-%d %H:%M')} from {len(results)} cell files in `{out}`.",
         "",
         "## Summary",
         "",
-        *(baseline_verdicts(groups) or ["- No env has both SarsaAAC and baseline cells."]),
+        *(headline_verdicts(groups, references) or ["- No env has SarsaAAC cells."]),
         "",
         "### The paper's figures against ours",
         "",
@@ -106,15 +107,15 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
             "",
             "Greedy performance at the end of training:",
             "",
-            performance_table(gs, ref),
+            performance_table(env_id, gs, ref),
             "",
         ]
-        lines += ["Learning speed and cost:", "", cost_table(gs, ref), ""]
+        lines += ["Learning speed and cost:", "", cost_table(env_id, gs, ref), ""]
     missing = [e for e in references if e not in groups]
     for env_id in missing:
-        lines += [f"### {env_title(env_id)}", "", performance_table([], references[env_id]), ""]
+        lines += [f"### {env_title(env_id)}", "", performance_table(env_id, [], references[env_id]), ""]
     lines += ["## Figures", ""]
-    for family in FAMILIES:
+    for family in PAPER_FAMILIES:
         if family_figs[family]:
             lines += [
                 f"### {FAMILY_TITLES[family]} (paper {FAMILY_FIGURES[family][1]})",
@@ -124,9 +125,10 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
             ]
     if best:
         lines += [
-            "### Best of each family and the baselines (paper Fig. 8)",
+            "### Best of each family, the peers and the baselines (paper Fig. 8)",
             "",
-            "Left: against training episodes (the paper's axis); right: against env steps (the budget all algorithms share).",
+            "Left: against training episodes (the paper's axis); middle: against env steps (the budget all algorithms "
+            "share); right: against training seconds on this machine (log scale; evaluations excluded).",
             "",
             f"![best]({best})",
             "",

@@ -15,6 +15,7 @@ from benchmarks import run as bench_run
 from benchmarks.adapters import DiscreteActionAdapter, FlatActionAdapter, baseline_env, env_action_space
 from benchmarks.presets import Cell, build_cells, select
 from benchmarks.report import build_report
+from benchmarks.significance import MIN_SEEDS
 from sb3_aac import DiscretizeParameterizedAction, FlattenParameterizedAction
 
 ENV_ID = "RoboCupDribblePaper-v0"
@@ -220,11 +221,16 @@ def test_presets_are_well_formed():
         ids = [c.cell_id for c in cells]
         assert len(ids) == len(set(ids))
     assert {c.env_id for c in quick} == {ENV_ID}
-    assert len({c.config for c in full if c.algo == "SarsaAAC"}) == 9
-    assert {c.algo for c in full} >= {"SarsaAAC", "PPO", "A2C", "SAC", "TD3", "DDPG", "DQN", "Reference"}
-    assert min(len({c.seed for c in full if c.config == k}) for k in ("rbf10", "mlp2", "rbfmlp20")) >= 5
-    # baselines get the same env-step budget as SarsaAAC
-    assert len({c.budget for c in full if c.algo != "Reference"}) == 1
+    assert {c.env_id for c in full} == {"RoboCupDribblePaper-v0", "RoboCupDribble-v0", "Platform-v0"}
+    assert {c.algo for c in full} >= {"SarsaAAC", "PDQN", "MPDQN", "PPO", "A2C", "SAC", "TD3", "DDPG", "DQN", "Reference"}
+    # the headline pairs have the seeds a verdict needs on every env; the paper's configs 5
+    for env_id in {c.env_id for c in full}:
+        for algo, config in (("SarsaAAC", "tile"), ("MPDQN", "mpdqn")):
+            assert len({c.seed for c in full if (c.env_id, c.algo, c.config) == (env_id, algo, config)}) >= MIN_SEEDS
+    assert min(len({c.seed for c in full if c.config == k}) for k in ("rbf50", "mlp2", "rbfmlp2")) >= 5
+    # every learner of an env gets the same env-step budget
+    for env_id in {c.env_id for c in full}:
+        assert len({c.budget for c in full if c.algo != "Reference" and c.env_id == env_id}) == 1
     assert select(full, "*SarsaAAC-rbf*") and all("rbf" in c.config for c in select(full, "*SarsaAAC-rbf*"))
 
 
@@ -233,21 +239,30 @@ def test_presets_are_well_formed():
 # ---------------------------------------------------------------------------------------------------------------------
 
 
+def synthetic_scores(env_id: str, d: float) -> dict:
+    if env_id == "Platform-v0":
+        return {"return_mean": d, "return_median": d, "success_share": float(d > 0.99)}
+    return {
+        "distance_mean": d,
+        "distance_median": d,
+        "distance_max": d + 5,
+        "reach20_share": float(d > 20),
+        "ball_loss_rate": 0.3,
+    }
+
+
 def synthetic_cell(env_id: str, algo: str, config: str, seed: int, final: float, family: str) -> dict:
     rate = {"rbf10": 0.004, "mlp2": 0.001}.get(config, 0.0005)
     episodes = np.arange(0, 12_001, 500)
-    distances = final * (1 - np.exp(-rate * episodes)) + 0.3 * seed
+    spread = 0.3 if env_id != "Platform-v0" else 0.003
+    distances = final * (1 - np.exp(-rate * episodes)) + spread * seed
     curve = [
         {
             "episodes": int(e),
             "env_steps": int(e * 14),
             "wall_s": e / 500,
             "train_s": e / 600,
-            "distance_mean": float(d),
-            "distance_median": float(d),
-            "distance_max": float(d + 5),
-            "reach20_share": float(d > 20),
-            "ball_loss_rate": 0.3,
+            **synthetic_scores(env_id, float(d)),
         }
         for e, d in zip(episodes, distances, strict=True)
     ]
@@ -257,19 +272,15 @@ def synthetic_cell(env_id: str, algo: str, config: str, seed: int, final: float,
         "cell": cell.to_dict(),
         "family": family,
         "command": "python -m benchmarks.run --preset full",
-        "algo_config": {"n_envs": 8, "wrapper": "flatten", "kwargs": {}} if algo != "SarsaAAC" else {},
+        "algo_config": {
+            "SarsaAAC": {},
+            "MPDQN": {"kwargs": {}, "other": "hyperparams/mpdqn.yml"},
+        }.get(algo, {"n_envs": 8, "wrapper": "flatten", "kwargs": {}}),
         "versions": {"python": "3.11"},
         "machine": {"cpu": "test CPU", "cores": 2, "platform": "linux", "torch_threads": 1},
         "started": "2026-01-01T00:00:00",
         "curve": curve,
-        "final": {
-            "episodes": 1000,
-            "distance_mean": float(distances[-1]),
-            "distance_median": float(distances[-1]),
-            "distance_max": float(distances[-1] + 6),
-            "reach20_share": 0.5,
-            "ball_loss_rate": 0.3,
-        },
+        "final": {"episodes": 1000, **synthetic_scores(env_id, float(distances[-1]))},
         "env_steps": 168_000,
         "episodes": 12_000,
         "train_wall_s": 20.0,
@@ -286,6 +297,9 @@ def test_report_from_synthetic_cells(tmp_path):
     results = [synthetic_cell(ENV_ID, "SarsaAAC", "rbf10", s, 24.0, "RBF") for s in range(10)]  # 10 seeds: a verdict
     results += [synthetic_cell(ENV_ID, "SarsaAAC", "mlp2", s, 15.0, "MLP") for s in range(3)]
     results += [synthetic_cell(ENV_ID, "DQN", "dqn", s, 26.0, "baseline") for s in range(10)]
+    results += [synthetic_cell(ENV_ID, "MPDQN", "mpdqn", s, 24.0, "peer") for s in range(10)]  # the same as SarsaAAC
+    results += [synthetic_cell("Platform-v0", "SarsaAAC", "tile", s, 0.95, "Tiles") for s in range(10)]
+    results += [synthetic_cell("Platform-v0", "MPDQN", "mpdqn", s, 0.99, "peer") for s in range(10)]
     reference = {
         "cell_id": "paper__reference",
         "cell": Cell(ENV_ID, "Reference", "references").to_dict(),
@@ -341,9 +355,15 @@ def test_report_from_synthetic_cells(tmp_path):
         "168,000 env steps",
     ):
         assert needle in text, needle
-    # the baseline is better here, and the report must say so
-    assert "the baseline DQN beats SarsaAAC" in text and "Welch's t-test on the difference" in text
-    assert "too few seeds (< 10)" in text  # the MLP claim rests on 3 seeds: no verdict
+    # the baseline is better here, MP-DQN the same, and the report must say so
+    assert "**DQN better**" in text and "Welch p" in text
+    peer_line = next(line for line in text.splitlines() if "vs the best parameterized peer, MPDQN" in line)
+    assert "at equal env steps (168,000) no significant difference" in peer_line
+    assert "too few seeds (< 5)" in text  # the MLP claim rests on 3 seeds: no verdict
+    # Platform: the published figures as references, and MP-DQN better than SarsaAAC here
+    assert "Platform-v0" in text and "0.987" in text and "Bester" in text
+    platform = text[text.index("- **Platform-v0**") :]
+    assert "**MPDQN better**" in platform.split("\n- ")[0]
     assert "not reached" in text  # MLP never reaches 20 m
     for name in ("fig_mlp.png", "fig_rbf.png", "fig_best.png", "fig_final.png", "fig_reliability.png"):
         assert (tmp_path / name).stat().st_size > 10_000, name
@@ -359,5 +379,5 @@ def test_the_quick_preset_runs_and_reports(tmp_path):
     assert len(cells) == len(build_cells("quick"))
     assert bench_report.main([str(out)]) == 0
     text = (out / "report.md").read_text()
-    assert "RBF arrays (10/input)" in text and "PPO" in text and "hand-coded" in text
+    assert "SarsaAAC tiles (recommended)" in text and "PPO" in text and "hand-coded" in text
     assert (out / "fig_best.png").stat().st_size > 10_000
