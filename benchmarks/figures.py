@@ -41,6 +41,7 @@ FAMILY_TITLES = {
 
 RELIABILITY_STYLE = {
     "sarsa_aac": ("#d94801", "best SarsaAAC"),
+    "peer": ("#006d2c", "best P-DQN/MP-DQN"),
     "baseline": ("#6a51a3", "best baseline"),
     "handcoded": ("black", "hand-coded"),
 }

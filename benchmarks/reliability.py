@@ -15,7 +15,7 @@ import torch as th
 from benchmarks import cells
 from benchmarks.cells import atomic_write_json
 from benchmarks.domains import distance_stats
-from benchmarks.presets import BASELINES, RELIABILITY_SEED, Cell
+from benchmarks.presets import BASELINES, PEERS, RELIABILITY_SEED, Cell
 from robocup_dribble import ENV_PROFILES
 from robocup_dribble.evaluation import reliability_test
 
@@ -51,10 +51,10 @@ def load_policy(out: Path, result: dict[str, Any]) -> Any:
 
     cell = Cell.from_dict(result["cell"])
     path = out / result["model"]
-    if cell.algo == "SarsaAAC":
-        from sb3_aac import SarsaAAC
+    if cell.algo == "SarsaAAC" or cell.algo in PEERS:
+        import sb3_aac
 
-        return load_checked(SarsaAAC, path, device="cpu")
+        return load_checked(getattr(sb3_aac, cell.algo), path, device="cpu")
     from benchmarks.adapters import ALGOS, adapter_for
 
     return adapter_for(load_checked(ALGOS[cell.algo], path, device="cpu"), cell.algo, cell.env_id)
@@ -78,7 +78,8 @@ def reliability_entry(policy: Any, profile: str, n_players: int, source: dict[st
 
 def run_reliability(out: str | Path, n_players: int = RELIABILITY_PLAYERS, progress: bool = True) -> dict[str, Any]:
     """The reliability test (``n_players`` fresh players, one episode each) of the best SarsaAAC policy, the best
-    baseline and the hand-coded dribbler of each env; cached in ``DIR/reliability.json`` (recomputed only for an
+    P-DQN/MP-DQN policy, the best SB3 baseline and the hand-coded dribbler of each dribbling env; cached in
+    ``DIR/reliability.json`` (recomputed only for an
     entry whose policy or player count changed)."""
     from robocup_dribble.dribbler import HandCodedDribbler
 
@@ -91,13 +92,14 @@ def run_reliability(out: str | Path, n_players: int = RELIABILITY_PLAYERS, progr
     except ValueError as error:
         warnings.warn(f"{error}; recomputing the reliability test", stacklevel=2)
         cache = {}
-    env_ids = sorted({r["cell"]["env_id"] for r in results if "final" in r})
+    env_ids = sorted({r["cell"]["env_id"] for r in results if "final" in r and r["cell"]["env_id"] in ENV_PROFILES})
     data: dict[str, Any] = {"seed": RELIABILITY_SEED, "command": os.environ.get("SB3_AAC_BENCH_COMMAND", ""), "envs": {}}
     for env_id in env_ids:
         profile = ENV_PROFILES[env_id]
         entries = {}
         picks = {
             "sarsa_aac": best_cell(results, env_id, ("SarsaAAC",)),
+            "peer": best_cell(results, env_id, tuple(PEERS)),
             "baseline": best_cell(results, env_id, tuple(BASELINES)),
         }
         for name, pick in picks.items():

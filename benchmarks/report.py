@@ -140,8 +140,8 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         lines += [
             f"10,000 fresh players (a new player-type set for every episode, seed {reliability['seed']}), "
             "one episode each, greedy. "
-            "The policies are the best SarsaAAC cell and the best baseline cell of each env "
-            "(best config by IQM final distance, "
+            "The policies are the best SarsaAAC cell, the best P-DQN/MP-DQN cell and the best SB3 baseline cell of each "
+            "dribbling env (best config by mean final distance, "
             "then its best seed, both chosen on the final evaluation set, not on these players), and the hand-coded dribbler.",
             "",
             reliability_table(reliability),
