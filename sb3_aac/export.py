@@ -23,7 +23,7 @@ import numpy as np
 
 from sb3_aac.common.output_files import replaced_atomically
 from sb3_aac.common.tile_coding import TileBank
-from sb3_aac.runtime import (
+from sb3_aac.runtime.format import (
     ALIGNMENT,
     ARRAY_DTYPE,
     FORMAT_NAME,
@@ -163,7 +163,7 @@ def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, 
         the same name)
     :param metadata: JSON-serialisable extras stored in the header (e.g. ``{"env_id": "RoboCupDribble-v0"}``)
     :return: the path written. The file is written to a temporary name beside it, re-read and checked with
-        :func:`sb3_aac.runtime.read_policy_file`, flushed to disk, then renamed into place: an interrupted export
+        :func:`sb3_aac.runtime.format.read_policy_file`, flushed to disk, then renamed into place: an interrupted export
         leaves the earlier file (or none), never a part or a stray temporary.
     """
     policy = _policy_of(model)
