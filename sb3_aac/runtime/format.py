@@ -1,8 +1,10 @@
 """
 The ``.aacp`` policy file format (``sb3-aac-policy`` version 2, see ``docs/export-format.md``): its constants, the
-arrays a header calls for, and the reader, which checks the magic bytes, a SHA-256 over the whole file, the format
-version, and the name, dtype, shape and placement of every array before returning any of them, and raises a
-:class:`ValueError` saying what is wrong. Loading never executes anything from the file.
+arrays a header calls for, the byte layout (:func:`encode_policy_file`, which :func:`sb3_aac.export_policy` writes
+with) and the reader. :func:`read_policy_file` checks the magic bytes, a SHA-256 over the whole file, the format
+version, and the name, dtype, shape and placement of every array before returning any of them;
+:func:`check_array_values` checks their values. Both raise a :class:`ValueError` saying what is wrong. Loading never
+executes anything from the file.
 """
 
 from __future__ import annotations
@@ -68,6 +70,29 @@ def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
         h = approx["head"]["hidden_units"]
         shapes.update(weight1=(a, h, f), bias1=(a, h), weight2=(a, h), bias2=(a,))
     return shapes
+
+
+def check_array_values(header: dict[str, Any], arrays: dict[str, np.ndarray], path: Any = "<memory>") -> None:
+    """
+    A ``ValueError`` unless the arrays of a (checked) header hold usable values: finite (observation bounds may be
+    infinite), ``obs_half`` and ``rbf_widths`` > 0, ``param_low <= param_high``, and tile-coding index arrays that
+    stay inside the table. :func:`read_policy_file` checks the file's structure, this its values.
+    """
+    for name, values in arrays.items():
+        if name in ("obs_low", "obs_high"):
+            if np.isnan(values).any():
+                raise _fail(path, f"array {name!r} holds NaN")
+        elif not np.isfinite(values).all():
+            raise _fail(path, f"array {name!r} holds NaN or inf values")
+    if not (arrays["obs_half"] > 0).all():
+        raise _fail(path, "obs_half must be > 0 everywhere")
+    if not (arrays["param_low"] <= arrays["param_high"]).all():
+        raise _fail(path, "param_low must be <= param_high everywhere")
+    if "rbf_widths" in arrays and not (arrays["rbf_widths"] > 0).all():
+        raise _fail(path, "rbf_widths must be > 0 everywhere")
+    features = header["approximators"]["features"]
+    if features["type"] == "tiles":
+        _check_tile_arrays(arrays, header["observation"]["size"], features["n_features"], path)
 
 
 def _check_tile_arrays(arrays: dict[str, np.ndarray], n_inputs: int, n_features: int, path: Any) -> None:
@@ -168,6 +193,25 @@ def policy_file_path(path: str | os.PathLike[str]) -> str:
     text = os.fspath(path)
     base = os.path.basename(text)
     return text + DEFAULT_SUFFIX if base and os.path.splitext(base)[1] == "" else text
+
+
+def encode_policy_file(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> bytes:
+    """
+    Lay out a header and its arrays as file bytes: preamble, JSON header (space-padded to 8 bytes), blob, SHA-256.
+
+    The header's ``arrays`` table and ``blob_size`` are filled in here.
+    """
+    table, chunks, offset = {}, [], 0
+    for name, array in arrays.items():
+        data = np.ascontiguousarray(array, dtype=ARRAY_DTYPE).tobytes()
+        table[name] = {"dtype": ARRAY_DTYPE, "shape": list(array.shape), "offset": offset, "nbytes": len(data)}
+        chunks.append(data)
+        offset += len(data)  # float64 arrays keep every offset a multiple of 8
+    header = {**header, "arrays": table, "blob_size": offset}
+    text = json.dumps(header, indent=1, allow_nan=False).encode("utf-8")
+    text += b" " * (-(PREAMBLE.size + len(text)) % ALIGNMENT)
+    body = PREAMBLE.pack(MAGIC, len(text)) + text + b"".join(chunks)
+    return body + hashlib.sha256(body).digest()
 
 
 def _read_exactly(f: Any, n: int, path: Any, what: str) -> bytes:

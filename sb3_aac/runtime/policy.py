@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .actions import env_action, unscale
-from .format import BANK_ARRAYS, TILE_ARRAYS, _check_tile_arrays, _fail, read_policy_file
+from .format import BANK_ARRAYS, TILE_ARRAYS, check_array_values, read_policy_file
 from .forward import BankForward, TileForward
 from .kernel import _act_kernel
 
@@ -49,19 +49,7 @@ class RuntimePolicy:
         self.n_params = action["n_params"]
         self.obs_low, self.obs_high = arrays["obs_low"], arrays["obs_high"]
         self.param_low, self.param_high = arrays["param_low"], arrays["param_high"]
-        for name, values in arrays.items():
-            if name in ("obs_low", "obs_high"):
-                if np.isnan(values).any():
-                    raise _fail(path, f"array {name!r} holds NaN")
-            elif not np.isfinite(values).all():
-                raise _fail(path, f"array {name!r} holds NaN or inf values")
-        if not (arrays["obs_half"] > 0).all():
-            raise _fail(path, "obs_half must be > 0 everywhere")
-        if not (self.param_low <= self.param_high).all():
-            raise _fail(path, "param_low must be <= param_high everywhere")
-
-        if "rbf_widths" in arrays and not (arrays["rbf_widths"] > 0).all():
-            raise _fail(path, "rbf_widths must be > 0 everywhere")
+        check_array_values(header, arrays, path)
         self.tiles = approx["features"]["type"] == "tiles"
         self.hidden_units = approx["head"].get("hidden_units")
         k = self.n_types
@@ -71,7 +59,6 @@ class RuntimePolicy:
         self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in slices]
         self._kernel_args: tuple[np.ndarray, ...] | None = None
         if self.tiles:
-            _check_tile_arrays(arrays, self.obs_size, approx["features"]["n_features"], path)
             if backend == "numba":
                 raise ValueError("backend='numba' computes dense features only; tile-coding policies run with numpy ('auto')")
             self._bank: BankForward | TileForward = TileForward(**{name: arrays[name] for name in TILE_ARRAYS})
