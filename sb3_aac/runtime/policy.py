@@ -11,10 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from .actions import env_action, unscale
+from .actions import env_action, unscale, unscale_value
 from .format import BANK_ARRAYS, TILE_ARRAYS, check_array_values, read_policy_file
 from .forward import BankForward, TileForward
-from .kernel import _act_kernel
+from .kernel import act_kernel, kernel_arguments
 
 BACKENDS = ("auto", "numpy", "numba")  # how act() computes: numba if importable, or numpy only
 
@@ -70,23 +70,15 @@ class RuntimePolicy:
         self.rbf, self.mlp = bank.rbf, bank.mlp
         self._feature_buffer = np.empty(bank.feature_a.shape)  # (D,) or (D, m), reused by act()
         if backend != "numpy":
-            kernel = _act_kernel()
+            kernel = act_kernel()
             if kernel is None and backend == "numba":
                 raise ValueError("backend='numba' needs numba (pip install numba); use backend='numpy' or 'auto'")
             if kernel is not None:
-                head2 = [bank.w2, bank.b2] if self.mlp else [np.zeros(0), np.zeros(0)]
-                segments = [bank.feature_a, bank.feature_b, bank.head_w, bank.head_b, *head2, self.param_low, self.param_high]
-                segments.append(np.array([bank.window_z2]))
-                segment_starts = np.cumsum([0] + [seg.size for seg in segments])[:-1]
-                # param_low's start also locates param_high
-                starts = [*segment_starts[:6], segment_starts[6], segment_starts[8]]
-                m = bank.feature_a.shape[1] if self.rbf else 0
-                sizes = [self.obs_size, m, approx["features"]["n_features"], self.hidden_units or 0, k]
-                meta = np.array([*sizes, *starts, *self.offsets], dtype=np.int64)
-                pack = np.concatenate([seg.ravel() for seg in segments])
+                pack, meta = kernel_arguments(bank, self.param_low, self.param_high, self.offsets)
                 self._kernel = kernel
                 active = np.empty(self._feature_buffer.size, dtype=np.int64)
-                self._kernel_args = (pack, meta, self._feature_buffer.reshape(-1), active, np.empty(max(self.dims)))
+                self._params_buffer = np.empty(max(self.dims))  # the chosen type's parameters, written by the kernel
+                self._kernel_args = (pack, meta, self._feature_buffer.reshape(-1), active, self._params_buffer)
         self.backend = "numpy" if self._kernel_args is None else "numba"
 
     # ------------------------------------------------------------------ loading
@@ -153,7 +145,7 @@ class RuntimePolicy:
             k, dim = self._kernel(x.reshape(-1), *self._kernel_args)
             if k < 0:
                 raise ValueError(f"The observation holds NaN or inf values: {x}")
-            return self.type_start + k, self._kernel_args[-1][:dim].astype(self.param_dtypes[k])
+            return self.type_start + k, self._params_buffer[:dim].astype(self.param_dtypes[k])
         if isinstance(self._bank, TileForward):  # self.tiles
             out = self._bank.outputs(self._bank.features(self._observation(obs)[None]))[0][0].tolist()
         else:
@@ -163,12 +155,9 @@ class RuntimePolicy:
             out = self._bank.outputs(phi)[0].tolist()
         q = out[: self.n_types]
         k = q.index(max(q))  # the first maximum, like numpy's argmax
-        # Unscale in Python floats: the same IEEE operations as unscale(), cheaper on a few values.
-        values = []
         start = self.n_types + self.offsets[k]
-        for scaled, low, high in zip(out[start : start + self.dims[k]], *self._bounds_lists[k], strict=True):
-            weight = 0.5 * scaled
-            values.append(min(max(low * (0.5 - weight) + high * (0.5 + weight), low), high))
+        scaled = out[start : start + self.dims[k]]
+        values = list(map(unscale_value, scaled, *self._bounds_lists[k]))
         return self.type_start + k, np.array(values, dtype=self.param_dtypes[k])
 
     def __call__(self, obs: Any) -> tuple[int, np.ndarray]:
