@@ -28,6 +28,7 @@ from sb3_aac.runtime.format import (
     TILE_ARRAYS,
     encode_policy_file,
     expected_array_shapes,
+    output_layout,
     policy_file_path,
     read_policy_file,
 )
@@ -74,6 +75,7 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
 
     bank, spec = policy.approximators, policy.spec
     k, n_params = spec.n_types, spec.n_params
+    n_outputs, outputs = output_layout(k, n_params)
     return {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
@@ -96,8 +98,8 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
             ],
         },
         "approximators": {
-            "n_outputs": k + n_params + 1,
-            "outputs": {"q": [0, k], "params": [k, k + n_params], "value": k + n_params},
+            "n_outputs": n_outputs,
+            "outputs": outputs,
             "features": _features_header(policy),
             "head": (
                 {"type": "linear"} if bank.hidden_units is None else {"type": "tanh_mlp", "hidden_units": bank.hidden_units}

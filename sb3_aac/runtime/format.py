@@ -72,6 +72,15 @@ def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
     return shapes
 
 
+def output_layout(n_types: int, n_params: int) -> tuple[int, dict[str, Any]]:
+    """
+    The number of approximator outputs and the header's ``outputs`` section: the Q values of the K types, then the
+    ``n_params`` scaled parameters, then the value V (``[start, stop)`` column ranges, and V's column).
+    """
+    k = n_types
+    return k + n_params + 1, {"q": [0, k], "params": [k, k + n_params], "value": k + n_params}
+
+
 def check_array_values(header: dict[str, Any], arrays: dict[str, np.ndarray], path: Any = "<memory>") -> None:
     """
     A ``ValueError`` unless the arrays of a (checked) header hold usable values: finite (observation bounds may be
@@ -178,8 +187,8 @@ def _check_header(header: Any, path: Any) -> None:
             raise _fail(path, f"{sizes}: both must be whole numbers >= 1")
         _check_features_and_head(features, head, d, path)
         outputs = approx["outputs"]
-        expected = {"q": [0, k], "params": [k, k + offset], "value": k + offset}
-        if approx["n_outputs"] != k + offset + 1 or outputs != expected:
+        n_outputs, expected = output_layout(k, offset)
+        if approx["n_outputs"] != n_outputs or outputs != expected:
             raise _fail(path, f"approximator outputs {outputs!r} (n_outputs={approx['n_outputs']!r}); expected {expected}")
         if not isinstance(header["arrays"], dict) or not _positive_int(header["blob_size"]):
             raise _fail(path, "the arrays table or blob_size is malformed")
