@@ -27,10 +27,9 @@ SIZE_FIELDS = ("n_inputs", "n_rbf", "n_features", "hidden_units", "n_types")
 PACK_FIELDS = ("feature_a", "feature_b", "head_w", "head_b", "w2", "b2", "param_low", "param_high", "window_z2")
 META_FIELDS = (*SIZE_FIELDS, *PACK_FIELDS)  # a PACK_FIELDS name in meta: where that array starts in pack
 M_INPUTS, M_RBF, M_FEATURES, M_HIDDEN, M_TYPES = (META_FIELDS.index(f) for f in SIZE_FIELDS)
-M_FEATURE_A, M_FEATURE_B, M_HEAD_W, M_HEAD_B, M_W2, M_B2 = (
-    META_FIELDS.index(f) for f in ("feature_a", "feature_b", "head_w", "head_b", "w2", "b2")
+M_FEATURE_A, M_FEATURE_B, M_HEAD_W, M_HEAD_B, M_W2, M_B2, M_PARAM_LOW, M_PARAM_HIGH, M_WINDOW = (
+    META_FIELDS.index(f) for f in PACK_FIELDS
 )
-M_PARAM_LOW, M_PARAM_HIGH, M_WINDOW = (META_FIELDS.index(f) for f in ("param_low", "param_high", "window_z2"))
 M_OFFSETS = len(META_FIELDS)  # type k's parameters are offsets k to k + 1 of the parameter vector
 
 
@@ -41,17 +40,25 @@ def kernel_arguments(
     ``pack`` and ``meta`` for the kernel (see the module docstring) of ``bank``'s dense features and head, with the
     parameter bounds ``param_low``, ``param_high`` ``(n_params,)`` and the K + 1 parameter ``offsets``.
     """
-    head2 = (bank.w2, bank.b2) if bank.mlp else (np.zeros(0), np.zeros(0))
-    arrays = dict(zip(("w2", "b2"), head2, strict=True))
-    arrays.update(feature_a=bank.feature_a, feature_b=bank.feature_b, head_w=bank.head_w, head_b=bank.head_b)
-    arrays.update(param_low=param_low, param_high=param_high, window_z2=np.array([bank.window_z2]))
+    w2, b2 = (bank.w2, bank.b2) if bank.mlp else (np.zeros(0), np.zeros(0))
+    arrays = {
+        "feature_a": bank.feature_a,
+        "feature_b": bank.feature_b,
+        "head_w": bank.head_w,
+        "head_b": bank.head_b,
+        "w2": w2,
+        "b2": b2,
+        "param_low": param_low,
+        "param_high": param_high,
+        "window_z2": np.array([bank.window_z2]),
+    }
     segments = [np.ravel(arrays[name]) for name in PACK_FIELDS]
     starts = np.cumsum([0] + [segment.size for segment in segments])[:-1]
     sizes = {
         "n_inputs": len(bank.feature_a),
         "n_rbf": bank.feature_a.shape[1] if bank.rbf else 0,
         "n_features": bank.head_w.shape[-1],
-        "hidden_units": bank.w2.shape[-1] if bank.mlp else 0,
+        "hidden_units": w2.shape[-1] if bank.mlp else 0,
         "n_types": len(offsets) - 1,
     }
     meta = np.array([*(sizes[name] for name in SIZE_FIELDS), *starts, *offsets], dtype=np.int64)
