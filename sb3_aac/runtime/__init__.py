@@ -21,17 +21,32 @@ and imported there as ``runtime``. One module per job:
 - :mod:`~sb3_aac.runtime.policy`: :class:`RuntimePolicy`.
 """
 
+# The public names, and every name code imported from the single module this package replaced (runtime.py).
 from .actions import LAYOUTS, env_action, unscale
-from .format import FORMAT_NAME, FORMAT_VERSION, MAGIC, PREAMBLE, expected_array_shapes, policy_file_path, read_policy_file
+from .format import (
+    ALIGNMENT,
+    ARRAY_DTYPE,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    MAGIC,
+    PREAMBLE,
+    TILE_ARRAYS,
+    expected_array_shapes,
+    policy_file_path,
+    read_policy_file,
+)
 from .forward import WINDOW_MIN_ROWS, BankForward, TileForward, check_rbf_window
 from .policy import RuntimePolicy
 
 __all__ = [
+    "ALIGNMENT",
+    "ARRAY_DTYPE",
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "LAYOUTS",
     "MAGIC",
     "PREAMBLE",
+    "TILE_ARRAYS",
     "WINDOW_MIN_ROWS",
     "BankForward",
     "RuntimePolicy",
