@@ -13,8 +13,6 @@ and :class:`sb3_aac.runtime.RuntimePolicy`, which reads it with numpy alone::
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 from pathlib import Path
 from typing import Any
@@ -23,15 +21,14 @@ import numpy as np
 
 from sb3_aac.common.output_files import replaced_atomically
 from sb3_aac.common.tile_coding import TileBank
-from sb3_aac.runtime import (
-    ALIGNMENT,
+from sb3_aac.runtime.format import (
     ARRAY_DTYPE,
     FORMAT_NAME,
     FORMAT_VERSION,
-    MAGIC,
-    PREAMBLE,
     TILE_ARRAYS,
+    encode_policy_file,
     expected_array_shapes,
+    output_layout,
     policy_file_path,
     read_policy_file,
 )
@@ -78,6 +75,7 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
 
     bank, spec = policy.approximators, policy.spec
     k, n_params = spec.n_types, spec.n_params
+    n_outputs, outputs = output_layout(k, n_params)
     return {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
@@ -100,8 +98,8 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
             ],
         },
         "approximators": {
-            "n_outputs": k + n_params + 1,
-            "outputs": {"q": [0, k], "params": [k, k + n_params], "value": k + n_params},
+            "n_outputs": n_outputs,
+            "outputs": outputs,
             "features": _features_header(policy),
             "head": (
                 {"type": "linear"} if bank.hidden_units is None else {"type": "tanh_mlp", "hidden_units": bank.hidden_units}
@@ -135,35 +133,16 @@ def _features_header(policy: Any) -> dict[str, Any]:
     }
 
 
-def encode_policy_file(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> bytes:
-    """
-    Lay out a header and its arrays as file bytes: preamble, JSON header (space-padded to 8 bytes), blob, SHA-256.
-
-    The header's ``arrays`` table and ``blob_size`` are filled in here.
-    """
-    table, chunks, offset = {}, [], 0
-    for name, array in arrays.items():
-        data = np.ascontiguousarray(array, dtype=ARRAY_DTYPE).tobytes()
-        table[name] = {"dtype": ARRAY_DTYPE, "shape": list(array.shape), "offset": offset, "nbytes": len(data)}
-        chunks.append(data)
-        offset += len(data)  # float64 arrays keep every offset a multiple of 8
-    header = {**header, "arrays": table, "blob_size": offset}
-    text = json.dumps(header, indent=1, allow_nan=False).encode("utf-8")
-    text += b" " * (-(PREAMBLE.size + len(text)) % ALIGNMENT)
-    body = PREAMBLE.pack(MAGIC, len(text)) + text + b"".join(chunks)
-    return body + hashlib.sha256(body).digest()
-
-
 def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, Any] | None = None) -> Path:
     """
-    Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy`` v1).
+    Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy``, version 2).
 
     :param model: a :class:`sb3_aac.SarsaAAC` model, or its policy
     :param path: where to write; ``.aacp`` is appended when the name has no suffix (``RuntimePolicy.load`` accepts
         the same name)
     :param metadata: JSON-serialisable extras stored in the header (e.g. ``{"env_id": "RoboCupDribble-v0"}``)
     :return: the path written. The file is written to a temporary name beside it, re-read and checked with
-        :func:`sb3_aac.runtime.read_policy_file`, flushed to disk, then renamed into place: an interrupted export
+        :func:`sb3_aac.runtime.format.read_policy_file`, flushed to disk, then renamed into place: an interrupted export
         leaves the earlier file (or none), never a part or a stray temporary.
     """
     policy = _policy_of(model)

@@ -152,16 +152,18 @@ def test_dribbling_model_and_metadata(tmp_dir: Path) -> None:
 
 
 def test_runtime_imports_numpy_only(tmp_dir: Path) -> None:
-    """runtime.py works copied out on its own: no torch, no SB3, not even the sb3_aac package."""
+    """The runtime package works copied out on its own: no torch, no SB3, not even the sb3_aac package."""
     model = randomised_model("RbfPolicy", "nested")
     path = export_policy(model, tmp_dir / "alone.aacp")
-    source = Path(__file__).resolve().parents[1] / "sb3_aac" / "runtime.py"
+    source = Path(__file__).resolve().parents[1] / "sb3_aac" / "runtime"
     script = f"""
 import importlib.util, sys
 for name in ("torch", "stable_baselines3", "sb3_aac", "gymnasium"):
     sys.modules[name] = None  # any import of these fails
-spec = importlib.util.spec_from_file_location("runtime", {str(source)!r})
-runtime = importlib.util.module_from_spec(spec)
+spec = importlib.util.spec_from_file_location(
+    "runtime", {str(source / "__init__.py")!r}, submodule_search_locations=[{str(source)!r}]
+)
+runtime = sys.modules["runtime"] = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(runtime)
 policy = runtime.RuntimePolicy.load({str(path)!r}, backend="numpy")
 print(policy.act([0.1, -0.2])[0])
@@ -187,14 +189,15 @@ print(sb3_aac.RuntimePolicy is RuntimePolicy)
 
 
 def test_runtime_in_a_numpy_only_venv(tmp_path: Path) -> None:
-    """As the README tells agents: runtime.py copied beside an agent, in a fresh venv with numpy alone, acts the same."""
+    """As the README tells agents: sb3_aac/runtime copied beside an agent, in a fresh venv with numpy alone, acts the same."""
     model = randomised_model("RbfPolicy", "nested")
     policy_path = export_policy(model, tmp_path / "agent.aacp")
     obs = observations(model, 200)
     np.save(tmp_path / "obs.npy", obs)
     agent_dir = tmp_path / "agent"
     agent_dir.mkdir()
-    shutil.copy(Path(__file__).resolve().parents[1] / "sb3_aac" / "runtime.py", agent_dir / "runtime.py")
+    source = Path(__file__).resolve().parents[1] / "sb3_aac" / "runtime"
+    shutil.copytree(source, agent_dir / "runtime", ignore=shutil.ignore_patterns("__pycache__"))
 
     venv_dir = tmp_path / "venv"
     python = venv_dir / ("Scripts" if os.name == "nt" else "bin") / "python"
@@ -399,7 +402,7 @@ def test_endless_stream_is_read_header_first(tmp_dir: Path) -> None:
             self.served += n
             return (self.start + b"\0" * n)[:n] if self.served == n else b"\0" * n
 
-    import sb3_aac.runtime as runtime
+    import sb3_aac.runtime.format as runtime
 
     for start, message in [(b"", "magic"), (PREAMBLE.pack(MAGIC, 2**40), "header length")]:
         stream = Endless(start)

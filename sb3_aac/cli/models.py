@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import inspect
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from sb3_aac.cli.arguments import CliError, input_file
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
@@ -14,11 +14,21 @@ POLICIES = ("MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy")
 # SarsaAAC constructor arguments the CLI sets itself (not through --set).
 RESERVED = ("policy", "env", "tensorboard_log", "seed", "device", "verbose", "_init_setup_model")
 POLICY_KEYS = ("hidden_units", "n_rbf", "rbf_width", "obs_bounds", "tile_groups", "tiles_per_input", "n_tilings")
-# --algo: the class name in sb3_aac, its default policy, and the policy arguments --set may give.
+
+
+class Algorithm(NamedTuple):
+    """What ``--algo`` names: the class name in sb3_aac, its default policy, and the policy arguments --set may give."""
+
+    class_name: str
+    default_policy: str
+    policy_keys: tuple[str, ...]
+
+
+PDQN_POLICY_KEYS = ("net_arch", "actor_net_arch", "param_bounding", "initial_params")
 ALGOS = {
-    "sarsa_aac": ("SarsaAAC", "TilePolicy", POLICY_KEYS),  # the README's recommended policy
-    "pdqn": ("PDQN", "MlpPolicy", ("net_arch", "actor_net_arch", "param_bounding", "initial_params")),
-    "mpdqn": ("MPDQN", "MlpPolicy", ("net_arch", "actor_net_arch", "param_bounding", "initial_params")),
+    "sarsa_aac": Algorithm("SarsaAAC", "TilePolicy", POLICY_KEYS),  # the README's recommended policy
+    "pdqn": Algorithm("PDQN", "MlpPolicy", PDQN_POLICY_KEYS),
+    "mpdqn": Algorithm("MPDQN", "MlpPolicy", PDQN_POLICY_KEYS),
 }
 MODEL_SUFFIXES = (".zip", ".aacp")
 
@@ -27,7 +37,7 @@ def algorithm(algo: str) -> Any:
     """The class ``--algo`` names."""
     import sb3_aac
 
-    return getattr(sb3_aac, ALGOS[algo][0])
+    return getattr(sb3_aac, ALGOS[algo].class_name)
 
 
 def sarsa_keys(algo: str = "sarsa_aac") -> list[str]:
@@ -38,7 +48,7 @@ def sarsa_keys(algo: str = "sarsa_aac") -> list[str]:
 def hyperparameters(pairs: list[tuple[str, Any]], algo: str = "sarsa_aac") -> dict[str, Any]:
     """``--set`` pairs as keyword arguments of ``--algo``'s class; policy arguments go into ``policy_kwargs``."""
     valid = sarsa_keys(algo)
-    policy_keys = ALGOS[algo][2]
+    policy_keys = ALGOS[algo].policy_keys
     kwargs: dict[str, Any] = {}
     policy_kwargs: dict[str, Any] = {}
     for key, value in pairs:

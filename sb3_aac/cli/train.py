@@ -70,7 +70,7 @@ def cmd_train(args: argparse.Namespace) -> None:
     import_gym_packages(args.gym_package)
     check_env_id(args.env)
     kwargs = hyperparameters(args.set, args.algo)
-    args.policy = args.policy or ALGOS[args.algo][1]
+    args.policy = args.policy or ALGOS[args.algo].default_policy
     if args.algo != "sarsa_aac" and args.policy != "MlpPolicy":
         raise CliError(f"--algo {args.algo} has one policy, MlpPolicy, not {args.policy}")
     if args.tensorboard is not None:
@@ -80,7 +80,8 @@ def cmd_train(args: argparse.Namespace) -> None:
         total_timesteps, budget = training_budget(args)
         model = build_model(args, kwargs)
         print(
-            f"training {ALGOS[args.algo][0]} {args.policy} on {args.env} for {budget}, {args.n_envs} env(s), seed {args.seed}"
+            f"training {ALGOS[args.algo].class_name} {args.policy} on {args.env} for {budget}, "
+            f"{args.n_envs} env(s), seed {args.seed}"
         )
         learn(model, args, total_timesteps)
         if publisher is not None:
@@ -114,7 +115,7 @@ def build_model(args: argparse.Namespace, kwargs: dict[str, Any]) -> Any:
         cls = algorithm(args.algo)
         return cls(args.policy, env, seed=args.seed, tensorboard_log=args.tensorboard, verbose=args.verbose, **kwargs)
     except (ValueError, TypeError, AssertionError) as error:
-        raise CliError(f"cannot build {ALGOS[args.algo][0]}({args.policy}) on {args.env}: {error}") from None
+        raise CliError(f"cannot build {ALGOS[args.algo].class_name}({args.policy}) on {args.env}: {error}") from None
 
 
 def learn(model: Any, args: argparse.Namespace, total_timesteps: int) -> None:
@@ -137,7 +138,7 @@ def learn(model: Any, args: argparse.Namespace, total_timesteps: int) -> None:
             total_timesteps,
             callback=callback,
             progress_bar=args.progress_bar,
-            tb_log_name=f"{ALGOS[args.algo][0]}_{args.policy}",
+            tb_log_name=f"{ALGOS[args.algo].class_name}_{args.policy}",
         )
     except FloatingPointError as error:
         raise CliError(str(error)) from None
@@ -174,7 +175,7 @@ def save_run(model: Any, publisher: DirectoryPublisher, settings: dict[str, Any]
     except OSError as error:
         raise CliError(f"cannot write the run to {publisher.out}: {error.strerror or error}") from None
     runtime = f", {out / 'policy.aacp'} (RuntimePolicy.load)" if exported else ""
-    print(f"saved {out / 'model.zip'} ({ALGOS[settings['algo']][0]}.load){runtime} and {out / 'run.json'}")
+    print(f"saved {out / 'model.zip'} ({ALGOS[settings['algo']].class_name}.load){runtime} and {out / 'run.json'}")
 
 
 def evaluate_greedy(model: Any, args: argparse.Namespace) -> None:

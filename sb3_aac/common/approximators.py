@@ -32,8 +32,8 @@ for a batch of ``n`` samples (one per environment) at once:
   overlap. So the summed step is non-expansive for any rate in ``(0, 1]`` whatever the number of lanes.
 
 The parameters are torch tensors (so SB3's ``state_dict``-based save/load keeps working), but every computation is
-numpy on the CPU: the forward pass is :class:`sb3_aac.runtime.BankForward`, the one implementation of the formulas
-above, which lives in the numpy-only ``runtime.py`` so that exported policies run the very same code.
+numpy on the CPU: the forward pass is :class:`sb3_aac.runtime.forward.BankForward`, the one implementation of the
+formulas above, which lives in the numpy-only :mod:`sb3_aac.runtime` so that exported policies run the very same code.
 :class:`BankKernel` adds the closed-form update and works on zero-copy views of the CPU parameter tensors, so no
 torch op runs per step. ``ApproximatorBank.forward`` runs the same numpy code and returns a tensor.
 """
@@ -47,11 +47,11 @@ import numpy as np
 import torch as th
 from torch import nn
 
-from sb3_aac.runtime import BankForward, check_rbf_window
+from sb3_aac.runtime.forward import BankForward, check_rbf_window
 
 if TYPE_CHECKING:
     from sb3_aac.common.tile_coding import TileKernel
-    from sb3_aac.runtime import TileForward
+    from sb3_aac.runtime.forward import TileForward
 
 # RBFs farther than this many standard deviations from the input are not computed (0): below exp(-12.5) = 3.7e-6.
 DEFAULT_RBF_WINDOW = 5.0
@@ -179,7 +179,7 @@ class ApproximatorBank(NumpyBank):
     :param rbf_width: RBF standard deviation in units of the centre spacing
     :param hidden_units: Hidden tanh units of each approximator, or ``None`` for a linear head
     :param rbf_window: Only the RBFs within this many standard deviations of the input are computed, the others
-        are 0 (:class:`~sb3_aac.runtime.BankForward`); ``None`` computes all
+        are 0 (:class:`~sb3_aac.runtime.forward.BankForward`); ``None`` computes all
     """
 
     def __init__(
@@ -240,7 +240,7 @@ class ApproximatorBank(NumpyBank):
 
 class BankKernel(BankForward):
     """
-    The numpy forward pass (:class:`~sb3_aac.runtime.BankForward`) of an :class:`ApproximatorBank`, with the cache
+    The numpy forward pass (:class:`~sb3_aac.runtime.forward.BankForward`) of an :class:`ApproximatorBank`, with the cache
     and the closed-form update of training.
 
     It holds views of the bank's CPU parameters, so updates write straight into the module, and constants

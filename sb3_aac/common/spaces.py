@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from sb3_aac.runtime import env_action, unscale
+from sb3_aac.runtime.actions import env_action, unscale
 
 _SUPPORTED = (
     "Tuple(Discrete(K), Tuple(Box_1, ..., Box_K)) (nested), Tuple(Discrete(K), Box_1, ..., Box_K) (flat), "
@@ -173,7 +173,7 @@ class ParameterizedActionSpec:
         """
         Map parameters from ``[-1, 1]`` to ``[low, high]`` and clip them inside the bounds. Shape ``(..., n_params)``.
 
-        The formula is :func:`sb3_aac.runtime.unscale`, which the exported policy's runtime uses as well.
+        The formula is :func:`sb3_aac.runtime.actions.unscale`, which the exported policy's runtime uses as well.
         """
         return unscale(self.low, self.high, params_scaled)
 

@@ -11,7 +11,7 @@ between any two inputs are representable without choosing them; users who know t
 
 Every feature has its own weight (no hashing: the table holds every tile of every grid), and an observation
 activates exactly ``C = n_groups * n_tilings`` features, so evaluation and training cost ``O(C)`` per approximator,
-whatever the table size. The forward pass is :class:`sb3_aac.runtime.TileForward` (shared with the exported
+whatever the table size. The forward pass is :class:`sb3_aac.runtime.forward.TileForward` (shared with the exported
 runtime); :class:`TileKernel` adds the update, the same normalised batch step as the dense banks
 (:func:`sb3_aac.common.approximators.step_normalisers`) computed on the sparse features: with ``w = 1 / (1 + C)``,
 sample ``i``'s weight step is scaled by ``w / c_w`` with ``c_w = max(1, max_i sum_{f active in i} n_f / C)``,
@@ -32,7 +32,7 @@ import torch as th
 from torch import nn
 
 from sb3_aac.common.approximators import NumpyBank
-from sb3_aac.runtime import TileForward
+from sb3_aac.runtime.forward import TileForward
 
 
 def default_tile_groups(n_inputs: int) -> list[tuple[int, ...]]:
@@ -220,7 +220,7 @@ class TileKernel(TileForward):
     """
     The tile forward pass on views of a :class:`TileBank`'s CPU parameters, with the closed-form update.
 
-    Training runs :class:`~sb3_aac.runtime.TileForward`'s formulas compiled with numba (the same float operations
+    Training runs :class:`~sb3_aac.runtime.forward.TileForward`'s formulas compiled with numba (the same float operations
     and summation order, so the same outputs; tested against the numpy forward pass).
     """
 

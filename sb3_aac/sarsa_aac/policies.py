@@ -37,7 +37,7 @@ class SarsaAACPolicy(BasePolicy):
         passed through unscaled.
     :param rbf_window: Only the Gaussians within this many standard deviations of each input are computed, the
         others are exactly 0, in training, ``predict`` and the exported runtime alike (see
-        :class:`~sb3_aac.runtime.BankForward`); ``None`` computes all. The default 5 drops features below
+        :class:`~sb3_aac.runtime.forward.BankForward`); ``None`` computes all. The default 5 drops features below
         ``exp(-12.5) = 3.7e-6``, so outputs differ from dense evaluation by less than ``3.7e-6`` times the sum of
         the absolute weights on the dropped features; at 50 RBFs per input it evaluates 13 of them per input.
     """

@@ -29,6 +29,9 @@ TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
 SCHEDULE_RESOLUTION = 1e-3
 # The weights are checked (and kept as the last finite ones) every this many steps.
 CHECK_INTERVAL = 256
+# The training statistics summed between log dumps (the vector _train_stats, in this order): steps, TD error delta,
+# |delta|, delta^2, the action-type actor's squared SARSA error, steps whose parameters moved (delta > 0).
+TRAIN_STAT_FIELDS = ("n", "delta", "delta_abs", "delta_sq", "q_error_sq", "improved")
 
 
 def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator) -> np.ndarray:
@@ -565,8 +568,8 @@ class SarsaAAC(BaseAlgorithm):
         self._lane_returns = None
         self._finite_weights = None
         self._finite_weights_timestep = 0
-        # Sums since the last dump: n, delta, |delta|, delta^2, q_error^2, count(delta > 0); type counts.
-        self._train_stats = np.zeros(6)
+        # Sums since the last dump (TRAIN_STAT_FIELDS); type counts.
+        self._train_stats = np.zeros(len(TRAIN_STAT_FIELDS))
         self._type_counts = np.zeros(n_types, dtype=np.int64)
 
     def _flush_td_chunks(self) -> None:
@@ -575,13 +578,20 @@ class SarsaAAC(BaseAlgorithm):
             return
         delta, q_error, k = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
         self._td_chunks.clear()
-        sums = np.array([len(delta), delta.sum(), np.abs(delta).sum(), delta @ delta, q_error @ q_error, (delta > 0).sum()])
+        sums = {
+            "n": len(delta),
+            "delta": delta.sum(),
+            "delta_abs": np.abs(delta).sum(),
+            "delta_sq": delta @ delta,
+            "q_error_sq": q_error @ q_error,
+            "improved": (delta > 0).sum(),
+        }
         self._check_weights()  # names the approximators that diverged
-        if not np.isfinite(sums[1:4]).all():
+        if not np.isfinite([sums["delta"], sums["delta_abs"], sums["delta_sq"]]).all():
             self._raise_divergence("the critic's TD error (delta)")
-        if not np.isfinite(sums[4]):
+        if not np.isfinite(sums["q_error_sq"]):
             self._raise_divergence("the action-type actor's SARSA error")
-        self._train_stats += sums
+        self._train_stats += [sums[name] for name in TRAIN_STAT_FIELDS]
         self._type_counts += np.bincount(k, minlength=len(self._type_counts))
 
     def _check_weights(self) -> None:
@@ -648,15 +658,16 @@ class SarsaAAC(BaseAlgorithm):
         if len(self.ep_success_buffer) > 0:
             record("rollout/success_rate", safe_mean(self.ep_success_buffer))
         record("rollout/exploration_rate", self.exploration_rate)
-        n, delta_sum, delta_abs, delta_sq, q_sq, improved = self._train_stats
+        stats = dict(zip(TRAIN_STAT_FIELDS, self._train_stats, strict=True))
+        n = stats["n"]
         if n > 0:
             for k, count in enumerate(self._type_counts):
                 record(f"rollout/type_freq_{k}", count / n)
-            record("train/td_error_mean", delta_sum / n)
-            record("train/td_error_abs_mean", delta_abs / n)
-            record("train/critic_loss", delta_sq / n)
-            record("train/q_loss", q_sq / n)
-            record("train/param_update_fraction", improved / n)
+            record("train/td_error_mean", stats["delta"] / n)
+            record("train/td_error_abs_mean", stats["delta_abs"] / n)
+            record("train/critic_loss", stats["delta_sq"] / n)
+            record("train/q_loss", stats["q_error_sq"] / n)
+            record("train/param_update_fraction", stats["improved"] / n)
         progress = self._current_progress_remaining
         record("train/param_noise", self.param_noise)
         record("train/learning_rate", self.lr_schedule(progress))

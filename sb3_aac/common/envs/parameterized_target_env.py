@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from sb3_aac.runtime import LAYOUTS
+from sb3_aac.runtime.actions import LAYOUTS
 
 
 class ParameterizedTargetEnv(gym.Env):

@@ -1,0 +1,60 @@
+"""
+Greedy SarsaAAC decisions from an exported policy file, with numpy alone.
+
+:func:`sb3_aac.export_policy` writes a trained policy as plain arrays and a JSON description (format
+``sb3-aac-policy`` version 2, see ``docs/export-format.md``); :class:`RuntimePolicy` reads it back and acts::
+
+    from sb3_aac.runtime import RuntimePolicy
+
+    policy = RuntimePolicy.load("dribbler.aacp")
+    action_type, params = policy.act(observation)  # params of that type, in the env's units
+
+This package imports only the standard library and numpy (no torch, no Stable-Baselines3, nothing else of
+``sb3_aac``: its modules import each other relatively), so its directory can be copied into an agent on its own
+and imported there as ``runtime``. One module per job:
+
+- :mod:`~sb3_aac.runtime.actions`: action layouts and parameter scaling (shared with training);
+- :mod:`~sb3_aac.runtime.forward`: the approximators' forward pass, the very code training and ``model.predict``
+  run, so the decisions are those of ``model.predict(obs, deterministic=True)``;
+- :mod:`~sb3_aac.runtime.format`: the ``.aacp`` file format, its constants and the checking reader;
+- :mod:`~sb3_aac.runtime.kernel`: the optional numba kernel for one decision (the same formulas compiled);
+- :mod:`~sb3_aac.runtime.policy`: :class:`RuntimePolicy`.
+"""
+
+# The public names, and every name code imported from the single module this package replaced (runtime.py).
+from .actions import LAYOUTS, env_action, unscale
+from .format import (
+    ALIGNMENT,
+    ARRAY_DTYPE,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    MAGIC,
+    PREAMBLE,
+    TILE_ARRAYS,
+    expected_array_shapes,
+    policy_file_path,
+    read_policy_file,
+)
+from .forward import WINDOW_MIN_ROWS, BankForward, TileForward, check_rbf_window
+from .policy import RuntimePolicy
+
+__all__ = [
+    "ALIGNMENT",
+    "ARRAY_DTYPE",
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "LAYOUTS",
+    "MAGIC",
+    "PREAMBLE",
+    "TILE_ARRAYS",
+    "WINDOW_MIN_ROWS",
+    "BankForward",
+    "RuntimePolicy",
+    "TileForward",
+    "check_rbf_window",
+    "env_action",
+    "expected_array_shapes",
+    "policy_file_path",
+    "read_policy_file",
+    "unscale",
+]

@@ -1,0 +1,228 @@
+"""
+The approximators' forward pass, numpy only: :class:`BankForward` (scaled-input or RBF features, linear or one-tanh
+-layer heads) and :class:`TileForward` (tile coding). Training subclasses them
+(:class:`sb3_aac.common.approximators.BankKernel`, :class:`sb3_aac.common.tile_coding.TileKernel`), and
+``model.predict`` and :class:`~sb3_aac.runtime.policy.RuntimePolicy` call them, so an exported policy decides
+with the very code training ran.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+# Batches of at least this many observations gather the RBF window (fancy indexing); smaller ones, where its fixed
+# cost dominates, compute every RBF and then zero those outside the window. The values are the same.
+WINDOW_MIN_ROWS = 32
+# ... and only where the window holds at most half of an input's centres (measured at 256 rows: the gather and scatter
+# cost about as much as the dense centres they save at 30 RBFs per input, 1.7x less at 50).
+WINDOW_MIN_SHARE = 2
+
+
+def check_rbf_window(rbf_window: Any) -> None:
+    """A ``ValueError`` unless ``rbf_window`` is None or a finite number of standard deviations > 0."""
+    if rbf_window is not None and not (
+        isinstance(rbf_window, (int, float)) and not isinstance(rbf_window, bool) and 0 < rbf_window < math.inf
+    ):
+        raise ValueError(f"rbf_window must be a finite number of standard deviations > 0, or None; got {rbf_window!r}")
+
+
+class BankForward:
+    """
+    The forward pass of a bank of ``A`` independent function approximators of one observation: the only
+    implementation of these formulas (see :mod:`sb3_aac.common.approximators` for the model). Training subclasses
+    it (:class:`~sb3_aac.common.approximators.BankKernel`), ``model.predict`` and :class:`RuntimePolicy` call it.
+
+    - features ``phi`` (``F``): the inputs scaled from ``[low, high]`` to ``[-1, 1]``, ``(s - mid) / half``; or per
+      input ``m`` Gaussian RBFs on the scaled input, ``exp(-0.5 * ((s~_i - c_ij) / w_ij)**2)``. Both are computed
+      as ``s * a - b`` (then ``exp(-z**2)`` for RBFs) with the constants ``a``, ``b`` folded once here;
+    - head of approximator ``a``: linear, ``weight[a] . phi + bias[a]``; or one tanh layer,
+      ``weight2[a] . tanh(weight1[a] @ phi + bias1[a]) + bias2[a]``.
+
+    The arguments are the arrays of the export format (names in ``BANK_ARRAYS``): ``obs_mid``, ``obs_half`` ``(D,)``;
+    ``rbf_centers``, ``rbf_widths`` ``(D, m)`` or None; ``weight`` ``(A, F)`` and ``bias`` ``(A,)``, or ``weight1``
+    ``(A, H, F)``, ``bias1`` ``(A, H)``, ``weight2`` ``(A, H)``, ``bias2`` ``(A,)``. The weights are held as given
+    (views, no copies), so in-place updates of them are seen by the next call.
+
+    ``rbf_window`` ``r`` (RBF features only; None: dense) keeps only the Gaussians within ``r`` standard deviations of
+    the input, ``|s~_i - c_ij| <= r * w_ij`` (decided on ``z = s * a - b`` as ``z * z <= r**2 / 2``, the same
+    operations in every implementation), and sets every other feature to exactly 0. Each dropped feature is below
+    ``exp(-r**2 / 2)`` (r = 5: 3.7e-6), so an output differs from the dense one by less than ``exp(-r**2 / 2)`` times
+    the sum of the absolute weights on the dropped features (before the tanh for an MLP head, which does not enlarge
+    it). Where every input's centres are evenly spaced with equal widths (:func:`~sb3_aac.common.approximators.rbf_layout`),
+    batches of ``WINDOW_MIN_ROWS`` or more evaluate only a window of ``window_size`` centres per input (where that
+    is at most half of them).
+    """
+
+    def __init__(
+        self,
+        obs_mid: np.ndarray,
+        obs_half: np.ndarray,
+        rbf_centers: np.ndarray | None = None,
+        rbf_widths: np.ndarray | None = None,
+        weight: np.ndarray | None = None,
+        bias: np.ndarray | None = None,
+        weight1: np.ndarray | None = None,
+        bias1: np.ndarray | None = None,
+        weight2: np.ndarray | None = None,
+        bias2: np.ndarray | None = None,
+        rbf_window: float | None = None,
+    ):
+        scale = 1.0 / obs_half
+        shift = obs_mid * scale
+        self.rbf = rbf_centers is not None
+        if (rbf_centers is None) != (rbf_widths is None):
+            raise ValueError("RBF features need both rbf_centers and rbf_widths (or neither, for scaled inputs)")
+        self.window_z2 = math.inf  # features with z * z above this are 0
+        self.window_size: int | None = None  # centres evaluated per input (None: all)
+        if rbf_centers is not None:
+            # exp(-0.5 * ((obs * scale - shift - c) / w)**2) = exp(-(obs * a - b)**2)
+            inv_w = np.sqrt(0.5) / rbf_widths
+            self.feature_a, self.feature_b = scale[:, None] * inv_w, (shift[:, None] + rbf_centers) * inv_w
+            if rbf_window is not None:
+                self._set_window(rbf_window)
+        else:
+            self.feature_a, self.feature_b = scale, shift
+        self.mlp = weight1 is not None
+        if weight1 is not None:
+            if bias1 is None or weight2 is None or bias2 is None:
+                raise ValueError("An MLP head needs weight1, bias1, weight2 and bias2")
+            self.w1, self.b1, self.w2, self.b2 = weight1, bias1, weight2, bias2
+            self.w1_flat, self.b1_flat = weight1.reshape(-1, weight1.shape[-1]), bias1.reshape(-1)
+            self.head_w, self.head_b = self.w1_flat, self.b1_flat
+        else:
+            if weight is None or bias is None:
+                raise ValueError("A linear head needs weight and bias")
+            self.w, self.b = self.head_w, self.head_b = weight, bias
+
+    def _set_window(self, rbf_window: float) -> None:
+        check_rbf_window(rbf_window)
+        self.window_z2 = 0.5 * float(rbf_window) ** 2
+        m = self.feature_a.shape[1]
+        step = self.feature_b[:, 1:] - self.feature_b[:, :-1] if m > 1 else np.ones((len(self.feature_b), 1))
+        uniform = bool(
+            m > 1
+            and (self.feature_a == self.feature_a[:, :1]).all()
+            and (step > 0).all()
+            and np.allclose(step, step[:, :1], rtol=1e-9, atol=0.0)
+        )
+        if not uniform:
+            return  # dense evaluation, then the mask
+        # In z units centre j of input i sits at b_i0 + j * step_i (a_i common): the window |z| <= sqrt(window_z2)
+        # spans at most 2 * sqrt(window_z2) / step + 1 centres; a margin of one on each side absorbs rounding.
+        self._first_b, self._b_step = self.feature_b[:, 0].copy(), step[:, 0].copy()
+        size = int(np.floor(2 * math.sqrt(self.window_z2) / self._b_step.min())) + 3
+        if WINDOW_MIN_SHARE * size <= m:
+            self.window_size = size
+            self._input_index = np.arange(len(self.feature_b))
+            # Row s + i * (m - size + 1): the feature_b values of input i's window starting at centre s.
+            self._window_b = sliding_window_view(self.feature_b, size, axis=1).reshape(-1, size)
+            self._window_rows = self._input_index * (m - size + 1)
+
+    def features(self, obs: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """
+        Observations ``(..., D)`` -> features ``(..., F)`` (float64).
+
+        :param out: a float64 buffer of shape ``(..., *feature_a.shape)`` to compute in (saves allocations)
+        """
+        if self.window_size is not None and obs.size >= WINDOW_MIN_ROWS * len(self.feature_b):
+            return self._window_features(obs, out, self.window_size)
+        z: np.ndarray = np.multiply(obs[..., None] if self.rbf else obs, self.feature_a, out=out)
+        np.subtract(z, self.feature_b, out=z)
+        if not self.rbf:
+            return z
+        np.multiply(z, z, out=z)
+        inside = z <= self.window_z2 if self.window_z2 < math.inf else None
+        np.negative(z, out=z)
+        np.exp(z, out=z)
+        if inside is not None:
+            np.multiply(z, inside, out=z)  # exactly 0 outside the window (a mask costs less than skipping exps)
+        return z.reshape(*obs.shape[:-1], -1)
+
+    def _window_features(self, obs: np.ndarray, out: np.ndarray | None, size: int) -> np.ndarray:
+        """:meth:`features` evaluating only ``size`` evenly spaced centres per input (same values)."""
+        a = self.feature_a[:, 0]
+        d, m = self.feature_a.shape
+        rows = obs.reshape(-1, d)
+        first = np.floor((rows * a - self._first_b - math.sqrt(self.window_z2)) / self._b_step) - 1.0
+        np.clip(first, 0, m - size, out=first)
+        start = first.astype(np.int64)  # (n, D): each input's first evaluated centre
+        b = self._window_b.take(start + self._window_rows, axis=0)  # (n, D, size)
+        z = rows[..., None] * a[:, None] - b  # the dense formula's operations, on the window only
+        np.multiply(z, z, out=z)
+        inside = z <= self.window_z2
+        np.negative(z, out=z)
+        np.exp(z, out=z)
+        np.multiply(z, inside, out=z)
+        phi = np.zeros((len(rows) * d, m)) if out is None else out.reshape(len(rows) * d, m)
+        if out is not None:
+            phi.fill(0.0)
+        windows = sliding_window_view(phi, size, axis=1, writeable=True)  # (n * D, m - size + 1, size)
+        windows[np.arange(len(phi)), start.reshape(-1)] = z.reshape(-1, size)
+        return phi.reshape(*obs.shape[:-1], d * m)
+
+    def outputs(self, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """Features ``(..., F)`` -> every output ``(..., A)``, and the tanh activations ``(..., A, H)`` (None if linear)."""
+        pre = phi @ self.head_w.T + self.head_b
+        if not self.mlp:
+            return pre, None
+        hidden = np.tanh(pre, out=pre).reshape(*phi.shape[:-1], *self.w2.shape)
+        return (hidden * self.w2).sum(-1) + self.b2, hidden
+
+
+class TileForward:
+    """
+    The forward pass of a bank of ``A`` linear approximators on tile-coding features: the only implementation
+    of these formulas (training subclasses it, :class:`sb3_aac.common.tile_coding.TileKernel`).
+
+    ``C`` codings (one per group of inputs and tiling) each activate exactly one binary feature. Coding ``c``
+    reads the inputs ``tile_inputs[c]`` (``k`` per coding; a padded slot has stride 0), scales each to
+    ``[-1, 1]`` with ``obs_mid`` / ``obs_half``, and takes the tile coordinate
+    ``clip(floor((s~ + 1) / 2 * tile_resolution + tile_offsets), 0, tile_resolution)`` per input; its active feature
+    is ``tile_bases[c] + sum_j coordinate_j * tile_strides[c, j]``. The output of approximator ``a`` is
+    ``sum_c tile_weight[active_c, a] + bias[a]``, so one evaluation costs ``O(C * A)`` whatever the table size.
+
+    The arguments are the arrays of the export format: ``obs_mid``, ``obs_half`` ``(D,)``; ``tile_inputs``,
+    ``tile_offsets``, ``tile_resolution``, ``tile_strides`` ``(C, k)``; ``tile_bases`` ``(C,)``; ``tile_weight``
+    ``(F, A)``; ``bias`` ``(A,)``. Index arrays may be given as float64 (as files store them). The weights are held
+    as given (views), so in-place updates are seen by the next call.
+    """
+
+    def __init__(
+        self,
+        obs_mid: np.ndarray,
+        obs_half: np.ndarray,
+        tile_inputs: np.ndarray,
+        tile_offsets: np.ndarray,
+        tile_resolution: np.ndarray,
+        tile_strides: np.ndarray,
+        tile_bases: np.ndarray,
+        tile_weight: np.ndarray,
+        bias: np.ndarray,
+    ):
+        self.inputs = np.asarray(tile_inputs).astype(np.int64)
+        half = np.asarray(obs_half, dtype=np.float64)[self.inputs]
+        mid = np.asarray(obs_mid, dtype=np.float64)[self.inputs]
+        resolution = np.asarray(tile_resolution, dtype=np.float64)
+        # (s - mid) / half * res / 2 + res / 2 + offset = s * a - b
+        self.tile_a = resolution / (2 * half)
+        self.tile_b = mid * self.tile_a - resolution / 2 - np.asarray(tile_offsets, dtype=np.float64)
+        self.limit = resolution
+        self.strides = np.asarray(tile_strides).astype(np.int64)
+        self.bases = np.asarray(tile_bases).astype(np.int64)
+        self.w, self.b = tile_weight, bias
+
+    def features(self, obs: np.ndarray) -> np.ndarray:
+        """Observations ``(n, D)`` -> the active feature of every coding, ``(n, C)`` int64."""
+        position = obs[:, self.inputs] * self.tile_a - self.tile_b  # (n, C, k)
+        np.floor(position, out=position)
+        np.clip(position, 0.0, self.limit, out=position)
+        active: np.ndarray = np.einsum("nck,ck->nc", position.astype(np.int64), self.strides) + self.bases
+        return active
+
+    def outputs(self, active: np.ndarray) -> tuple[np.ndarray, None]:
+        """Active features ``(n, C)`` -> every output ``(n, A)`` (and None: there is no hidden layer)."""
+        return self.w[active].sum(1) + self.b, None

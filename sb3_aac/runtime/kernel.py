@@ -1,0 +1,158 @@
+"""
+The optional numba kernel behind :meth:`~sb3_aac.runtime.policy.RuntimePolicy.act`: one greedy decision for one
+observation, the formulas of :class:`~sb3_aac.runtime.forward.BankForward` and
+:func:`~sb3_aac.runtime.actions.unscale_value` written as loops and compiled. Without numba the runtime uses numpy
+alone.
+
+The kernel takes its numbers in two flat vectors, built by :func:`kernel_arguments`: ``pack`` (float64), the arrays
+named by :data:`PACK_FIELDS` one after the other, and ``meta`` (int64), laid out as :data:`META_FIELDS` (the sizes,
+then where each array of ``pack`` starts) followed by the K + 1 parameter offsets. Every index into ``meta`` is a
+constant looked up by name in :data:`META_FIELDS`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from .actions import unscale_value
+from .forward import BankForward
+
+# n_rbf: RBFs per input (0: scaled inputs); hidden_units: tanh units per approximator (0: linear head).
+SIZE_FIELDS = ("n_inputs", "n_rbf", "n_features", "hidden_units", "n_types")
+# BankForward's folded feature constants and head weights (w2, b2 empty for a linear head), the parameter bounds,
+# and the RBF window (one value).
+PACK_FIELDS = ("feature_a", "feature_b", "head_w", "head_b", "w2", "b2", "param_low", "param_high", "window_z2")
+META_FIELDS = (*SIZE_FIELDS, *PACK_FIELDS)  # a PACK_FIELDS name in meta: where that array starts in pack
+M_INPUTS, M_RBF, M_FEATURES, M_HIDDEN, M_TYPES = (META_FIELDS.index(f) for f in SIZE_FIELDS)
+M_FEATURE_A, M_FEATURE_B, M_HEAD_W, M_HEAD_B, M_W2, M_B2, M_PARAM_LOW, M_PARAM_HIGH, M_WINDOW = (
+    META_FIELDS.index(f) for f in PACK_FIELDS
+)
+M_OFFSETS = len(META_FIELDS)  # type k's parameters are offsets k to k + 1 of the parameter vector
+
+
+def kernel_arguments(
+    bank: BankForward, param_low: np.ndarray, param_high: np.ndarray, offsets: Sequence[int]
+) -> tuple[np.ndarray, np.ndarray]:
+    """
+    ``pack`` and ``meta`` for the kernel (see the module docstring) of ``bank``'s dense features and head, with the
+    parameter bounds ``param_low``, ``param_high`` ``(n_params,)`` and the K + 1 parameter ``offsets``.
+    """
+    w2, b2 = (bank.w2, bank.b2) if bank.mlp else (np.zeros(0), np.zeros(0))
+    arrays = {
+        "feature_a": bank.feature_a,
+        "feature_b": bank.feature_b,
+        "head_w": bank.head_w,
+        "head_b": bank.head_b,
+        "w2": w2,
+        "b2": b2,
+        "param_low": param_low,
+        "param_high": param_high,
+        "window_z2": np.array([bank.window_z2]),
+    }
+    segments = [np.ravel(arrays[name]) for name in PACK_FIELDS]
+    starts = np.cumsum([0] + [segment.size for segment in segments])[:-1]
+    sizes = {
+        "n_inputs": len(bank.feature_a),
+        "n_rbf": bank.feature_a.shape[1] if bank.rbf else 0,
+        "n_features": bank.head_w.shape[-1],
+        "hidden_units": w2.shape[-1] if bank.mlp else 0,
+        "n_types": len(offsets) - 1,
+    }
+    meta = np.array([*(sizes[name] for name in SIZE_FIELDS), *starts, *offsets], dtype=np.int64)
+    return np.concatenate(segments), meta
+
+
+def _compile_act_kernel() -> Any:  # noqa: C901 (a compiled kernel: its loops and branches are the point)
+    """
+    A numba-compiled ``act`` for one observation, or None without numba: :meth:`BankForward.features` and
+    :meth:`BankForward.outputs` (on :class:`BankForward`'s folded constants and weights), the argmax and
+    :func:`~sb3_aac.runtime.actions.unscale_value`, the same formulas written as loops and compiled.
+
+    Optional, and only a speed-up: the runtime needs only numpy; numba (a dependency of sb3-aac) removes numpy's
+    per-call overhead, a microsecond or more for each of the dozen array operations of a decision, which a single
+    decision cannot amortise (numpy alone does not reach 10 us). Sums run in a different order than numpy's BLAS,
+    so outputs can differ from the numpy path in the last bit; the decisions are the same except for exact ties of
+    that size (tested on every policy and layout).
+    """
+    try:
+        import numba
+    except ImportError:
+        return None
+
+    unscale_one = numba.njit(inline="always")(unscale_value)
+
+    # reassoc lets LLVM vectorise the dot products (their order differs from numpy's BLAS anyway); no nnan/ninf,
+    # so the finiteness check stays valid.
+    # Untyped for mypy: numba infers the argument types from the arrays it is called with.
+    @numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
+    def act_kernel(x, pack, meta, phi, active, params):  # type: ignore[no-untyped-def]  # noqa: C901  # pragma: no cover
+        # Few arguments: numba's dispatch costs about as much per argument as a small loop iteration does.
+        # pack and meta: see the module docstring. phi[:n_active] holds the features that are not 0 (outside the RBF
+        # window), active[:n_active] their indices.
+        d, m, n_features, h = meta[M_INPUTS], meta[M_RBF], meta[M_FEATURES], meta[M_HIDDEN]
+        n_types, fa, fb, pw, pb = meta[M_TYPES], meta[M_FEATURE_A], meta[M_FEATURE_B], meta[M_HEAD_W], meta[M_HEAD_B]
+        pw2, pb2, plow, phigh, pwin = meta[M_W2], meta[M_B2], meta[M_PARAM_LOW], meta[M_PARAM_HIGH], meta[M_WINDOW]
+        total = 0.0
+        for i in range(d):
+            total += x[i] * x[i]
+        if not np.isfinite(total):
+            return -1, 0
+        n_active = 0
+        if m > 0:
+            window_z2 = pack[pwin]
+            for i in range(d):
+                for j in range(m):
+                    z = x[i] * pack[fa + i * m + j] - pack[fb + i * m + j]
+                    if z * z <= window_z2:
+                        phi[n_active] = np.exp(-(z * z))
+                        active[n_active] = i * m + j
+                        n_active += 1
+        else:
+            for i in range(d):
+                phi[i] = x[i] * pack[fa + i] - pack[fb + i]
+                active[i] = i
+            n_active = d
+
+        def output(a: int) -> float:  # numba ignores the annotations
+            if h > 0:
+                acc = 0.0
+                for u in range(h):
+                    row = a * h + u
+                    s = 0.0
+                    for f in range(n_active):
+                        s += pack[pw + row * n_features + active[f]] * phi[f]
+                    acc += np.tanh(s + pack[pb + row]) * pack[pw2 + row]
+                return acc + pack[pb2 + a]  # type: ignore[no-any-return]  # numba: pack's elements are untyped
+            s = 0.0
+            for f in range(n_active):
+                s += pack[pw + a * n_features + active[f]] * phi[f]
+            return s + pack[pb + a]  # type: ignore[no-any-return]  # numba: pack's elements are untyped
+
+        k, best = 0, output(0)
+        for a in range(1, n_types):
+            q = output(a)
+            if q > best:
+                k, best = a, q
+        start, dim = meta[M_OFFSETS + k], meta[M_OFFSETS + k + 1] - meta[M_OFFSETS + k]
+        for j in range(dim):
+            params[j] = unscale_one(output(n_types + start + j), pack[plow + start + j], pack[phigh + start + j])
+        return k, dim
+
+    return act_kernel
+
+
+_ACT_KERNEL: Any = False  # compiled on first use
+
+
+def act_kernel() -> Any:
+    """The compiled kernel (compiled on the first call), or None without numba. Call it as
+    ``act_kernel()(x, pack, meta, phi, active, params) -> (k, dim)``: the chosen 0-based type ``k`` (-1 for an
+    observation with NaN or inf) and its parameters in ``params[:dim]``; ``phi`` and ``active`` are scratch buffers
+    of ``n_features`` float64 and int64 values."""
+    global _ACT_KERNEL
+    if _ACT_KERNEL is False:
+        _ACT_KERNEL = _compile_act_kernel()
+    return _ACT_KERNEL
