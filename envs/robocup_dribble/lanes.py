@@ -13,11 +13,17 @@ starts the next one (in lane order), taking, if its type set is used up, a new s
 ``player_types`` values that order it, and then the six values of its start state
 (:func:`robocup_dribble.task.start_lane`). This is random stream version 2; version 1 (before the episode starts
 moved into the compiled loop) drew the type sets from a separately drawn pool.
+
+Two ways around that stream, for callers that need each episode's draws to be fixed by something other than the
+order of resets (common random numbers, :func:`robocup_dribble.evaluation.evaluate_dribbling`):
+:meth:`DribbleLanes.start_from` starts given lanes from caller-given generators (one each), and
+:meth:`DribbleLanes.step` takes a cycle's physics uniforms from the caller. Neither touches the stream above.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
@@ -145,6 +151,12 @@ class DribbleLanes:
 
         :raises ValueError: for indices that are not integers in range or repeat; nothing changes.
         """
+        index = self._checked_lanes(lanes)
+        obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
+        self._start(index, obs, by_row=True)
+        return obs
+
+    def _checked_lanes(self, lanes: np.ndarray) -> np.ndarray:
         index = np.asarray(lanes)
         if index.ndim != 1 or index.dtype.kind not in "iu":
             raise ValueError(f"lanes must be a 1-D integer array, got {index!r:.200}")
@@ -153,19 +165,23 @@ class DribbleLanes:
             raise ValueError(f"lanes must lie in 0..{self.n_lanes - 1}, got {index!r:.200}")
         if len(np.unique(index)) != len(index):
             raise ValueError(f"lanes must be distinct, got {index!r:.200}")
-        obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
-        self._start(index, obs, by_row=True)
-        return obs
+        return index
 
-    def step(self, action_types: np.ndarray, params: np.ndarray, autoreset: bool = True) -> LaneStep:
+    def step(
+        self, action_types: np.ndarray, params: np.ndarray, autoreset: bool = True, uniforms: np.ndarray | None = None
+    ) -> LaneStep:
         """Advance every lane by one action (one server cycle); with ``autoreset`` start the next episode of every
         lane whose episode ended.
 
         :param action_types: ``(N,)`` integers in 0..3.
         :param params: ``(N, 7)`` finite parameters; out-of-range values are clipped to the bounds.
-        :raises ValueError: for a wrong shape, an action type outside 0..3 or a non-finite parameter; nothing changes.
+        :param uniforms: ``(N, physics.N_UNIFORMS)`` values in [0, 1] for this cycle's physics noise (row ``i`` for
+            lane ``i``, roles ``physics.U_*``) instead of drawing them from ``rng`` (episode starts still draw from it).
+        :raises ValueError: for a wrong shape, an action type outside 0..3, a non-finite parameter or uniforms that
+            are not an ``(N, N_UNIFORMS)`` array of values in [0, 1]; nothing changes.
         """
         kinds, params = self._checked(action_types, params)
+        given = None if uniforms is None else self._checked_uniforms(uniforms)
         n = self.n_lanes
         out = LaneStep(
             observations=np.empty((n, task.N_OBSERVATIONS), dtype=np.float32),
@@ -177,7 +193,7 @@ class DribbleLanes:
             episode_returns=np.zeros(n),
             episode_lengths=np.zeros(n, dtype=np.int64),
         )
-        physics_uniforms = self._take(n * physics.N_UNIFORMS).reshape(n, physics.N_UNIFORMS)
+        physics_uniforms = self._take(n * physics.N_UNIFORMS).reshape(n, physics.N_UNIFORMS) if given is None else given
         # separate arrays, in LaneStep's order for the outputs: numba unpacks them faster than NamedTuples
         ended = _step_lanes(*self._step_arrays, kinds, params, physics_uniforms, *out)
         if autoreset and len(ended):
@@ -212,6 +228,41 @@ class DribbleLanes:
                 start = int(self._position[0])
                 self._uniforms = np.concatenate((self._uniforms[start:], self.rng.random(_DRAW_BLOCK)))
                 self._position[0] = 0
+
+    def start_from(self, lanes: np.ndarray, generators: Sequence[np.random.Generator]) -> np.ndarray:
+        """Start a new episode in each of ``lanes`` from its own generator (not from ``rng``); returns their
+        observations ``(len(lanes), 10)``.
+
+        Lane ``lanes[r]`` draws from ``generators[r]``, in the order of an episode start that begins a type set (the
+        module docstring): a fresh set of player types (:func:`draw_type_set`), ``player_types`` values that order it
+        (the episode plays the type with the smallest), and the six values of its start state. The lane's set is
+        that one set (its next episode started by :meth:`reset` or an autoreset plays the set's next type).
+
+        :raises ValueError: for indices that are not integers in range or repeat, or a number of generators other
+            than ``len(lanes)``; nothing changes.
+        """
+        index = self._checked_lanes(lanes)
+        if len(generators) != len(index):
+            raise ValueError(f"start_from needs one generator per lane ({len(index)}), got {len(generators)}")
+        rows = np.stack([generator.random(_START_BLOCK) for generator in generators]) if len(index) else np.empty((0, 1))
+        obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
+        for r in self._start_rows(index, rows, obs):  # its row ran short (a rare run of rejected types): extend it
+            row, short = rows[r : r + 1], True
+            while short:
+                row = np.concatenate((row, generators[r].random((1, row.shape[1]))), axis=1)
+                short = len(self._start_rows(index[r : r + 1], row, obs[r : r + 1])) > 0
+        return obs
+
+    def _start_rows(self, lanes: np.ndarray, rows: np.ndarray, obs: np.ndarray) -> np.ndarray:
+        """Start ``lanes[r]`` from ``rows[r]`` (a fresh type set); returns the ``r`` whose row ran short (those lanes
+        are left half-started: start them again from a longer row)."""
+        return _start_lanes_from_rows(self.arrays, self._settings, self.profile.player.player_types, lanes, rows, obs)
+
+    def _checked_uniforms(self, uniforms: np.ndarray) -> np.ndarray:
+        given = physics.input_array("uniforms", uniforms, (self.n_lanes, physics.N_UNIFORMS))
+        if not ((given >= 0.0) & (given <= 1.0)).all():
+            raise ValueError("uniforms must lie in [0, 1]")
+        return given
 
     def player_type(self, lane: int) -> PlayerType:
         """The player type of a lane's current episode."""
@@ -263,6 +314,7 @@ def _first_invalid(kinds: np.ndarray, params: np.ndarray) -> int:
 
 
 _DRAW_BLOCK = 4096  # uniforms drawn from the Generator at least per refill of the buffer
+_START_BLOCK = 512  # uniforms drawn per lane by DribbleLanes.start_from (a v19 start takes about 145, rarely 240)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -411,3 +463,45 @@ def _step_lanes(
             ended[n_ended] = i
             n_ended += 1
     return ended[:n_ended]
+
+
+@njit(cache=True, error_model="numpy")
+def _start_lanes_from_rows(a: LaneArrays, g: LaneSettings, player_types: int, lanes, rows, obs) -> np.ndarray:
+    """Start each ``lanes[r]`` with a fresh type set from the uniforms ``rows[r]`` and write its observation to
+    ``obs[r]``; returns the ``r`` whose row ran short, in order."""
+    k, c, _, _, obs_low, obs_high, recipe = g
+    state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns = a
+    type_set, order_keys = np.empty((1, player_types, a.types.shape[1])), np.empty(player_types)
+    position = np.zeros(1, dtype=np.int64)
+    short = np.empty(lanes.shape[0], dtype=np.int64)
+    n_short = 0
+    for r in range(lanes.shape[0]):
+        i = lanes[r]
+        episodes_in_set[i] = 0
+        position[0] = 0
+        started = _start_lane(
+            state,
+            types,
+            set_types,
+            set_ids,
+            episodes_in_set,
+            type_ids,
+            steps,
+            start_x,
+            distance,
+            returns,
+            k,
+            c,
+            recipe,
+            i,
+            rows[r],
+            position,
+            type_set,
+            order_keys,
+        )
+        if started:
+            task.observe(state, i, types, i, obs_low, obs_high, obs, r)
+        else:
+            short[n_short] = r
+            n_short += 1
+    return short[:n_short]
