@@ -4,11 +4,15 @@ Any policy with an SB3-style ``predict(obs, deterministic=True) -> (actions, sta
 :class:`robocup_dribble.dribbler.HandCodedDribbler`).
 
 **Episode slots.** An evaluation with ``seed`` plays the episode slots ``j = 0 .. n_episodes - 1``. Everything random
-in slot ``j`` comes from its own generator ``numpy.random.default_rng([seed, j])``, in this order: first the physics
-uniforms of every cycle, ``max_actions`` rows of ``physics.N_UNIFORMS`` values (cycle ``t`` of the episode uses row
-``t``, columns in ``physics.U_*`` roles), then the episode's start
+in slot ``j`` comes from its own block of ``B = max_actions * physics.N_UNIFORMS + START_UNIFORMS`` uniforms of the
+counter-based generator ``numpy.random.Philox(key=seed)``: the values from counter ``(j * B / 4, 0, 0, 0)`` on (each
+counter value gives four; ``numpy.random.Generator.random``), so slot ``j``'s values do not depend on any other slot.
+The block holds first the physics uniforms of every cycle, ``max_actions`` rows of ``physics.N_UNIFORMS`` values
+(cycle ``t`` of the episode uses row ``t``, columns in ``physics.U_*`` roles), then the episode's start
 (:meth:`robocup_dribble.lanes.DribbleLanes.start_from`): a fresh set of heterogeneous player types drawn by the
-server's rules, the one type of it the episode plays, and the start state. So slot ``j`` is the same episode (player
+server's rules, the one type of it the episode plays, and the start state. A start that needs more than
+``START_UNIFORMS`` values (a long run of rejected types; a v19 start takes about 145) continues with the values from
+counter ``(0, j, 1, 0)`` on, which no block reaches. So slot ``j`` is the same episode (player
 type, start state and noise of every cycle) for every policy, whichever lane plays it and whenever: two policies'
 ``distances[j]`` are paired observations. Slots are handed to lanes in order as lanes free up; results come back in
 slot order. Each slot is its own fresh type set (``episodes_per_type_set`` has no effect here), so every episode's
@@ -33,6 +37,9 @@ from robocup_dribble.params import EPS, ServerProfile, make_profile, without_noi
 from robocup_dribble.player_types import draw_type_table
 from robocup_dribble.task import DribbleTask
 from robocup_dribble.vec_env import parse_actions
+
+START_UNIFORMS = 256
+"""Uniforms of an episode slot's block for its start (module docstring); changing it changes every slot's episode."""
 
 
 @dataclass(frozen=True)
@@ -85,18 +92,21 @@ def evaluate_dribbling(
         observations (Tuple actions, as :class:`robocup_dribble.vec_env.DribbleVecEnv` takes them).
     :param n_episodes: episodes to play (slots).
     :param profile: the env's server profile (``"v19"``, ``"v11"``, or a ``ServerProfile``).
-    :param seed: the evaluation set (an integer >= 0): the same seed gives the same episodes to every policy.
+    :param seed: the evaluation set (an integer in 0 .. 2**64 - 1): the same seed gives the same episodes to every
+        policy.
     :param n_lanes: episodes run side by side (at most ``n_episodes``); the results do not depend on it for a policy
         that acts on each observation alone.
     :param deterministic: passed to ``predict`` (greedy actions by default).
     :param env_kwargs: ``noise`` and the :class:`robocup_dribble.task.DribbleTask` settings of the env
         (``episodes_per_type_set`` is accepted and has no effect: every slot draws its own type set).
-    :raises ValueError: for ``n_episodes`` or ``n_lanes`` not an integer >= 1, ``seed`` not an integer >= 0, or an
+    :raises ValueError: for ``n_episodes`` or ``n_lanes`` not an integer >= 1, ``seed`` not an integer in 0 .. 2**64 - 1, or an
         unknown or invalid env setting.
     """
     _check_integer("n_episodes", n_episodes, 1)
     _check_integer("n_lanes", n_lanes, 1)
     _check_integer("seed", seed, 0)
+    if seed >= 2**64:
+        raise ValueError(f"seed must be below 2**64 (a Philox key word), got {seed!r}")
     server_profile, task_settings = configure(profile, env_kwargs.pop("noise", True), None, env_kwargs)
     n_lanes = min(int(n_lanes), int(n_episodes))
     lanes = DribbleLanes(n_lanes, server_profile, task_settings, np.random.default_rng(seed))  # its rng stays unused
@@ -104,10 +114,10 @@ def evaluate_dribbling(
     all_lanes = np.arange(n_lanes)
     slot_of_lane = np.arange(n_lanes)
     noise = np.empty((n_lanes, task_settings.max_actions, physics.N_UNIFORMS))
-    obs = episodes.start(lanes, all_lanes, slot_of_lane, noise)
+    obs = episodes.start(lanes, all_lanes, 0, noise)
     next_slot = n_lanes
     last_cycle = task_settings.max_actions - 1
-    while next_slot < n_episodes or (slot_of_lane >= 0).any():
+    while (slot_of_lane >= 0).any():
         actions, _ = policy.predict(obs, deterministic=deterministic)
         kinds, params = parse_actions(actions)
         # lanes without a slot (at the end) keep stepping on their last cycle's noise; their results are dropped
@@ -117,11 +127,12 @@ def evaluate_dribbling(
         ended = np.flatnonzero((out.terminated | out.truncated) & (slot_of_lane >= 0))
         if len(ended):
             episodes.record(slot_of_lane[ended], out.distances[ended], out.terminated[ended])
-            freed, next_slot = ended[: n_episodes - next_slot], min(n_episodes, next_slot + len(ended))
             slot_of_lane[ended] = -1
-            slot_of_lane[freed] = np.arange(next_slot - len(freed), next_slot)
+            freed = ended[: n_episodes - next_slot]
             if len(freed):
-                obs[freed] = episodes.start(lanes, freed, slot_of_lane[freed], noise)
+                slot_of_lane[freed] = np.arange(next_slot, next_slot + len(freed))
+                obs[freed] = episodes.start(lanes, freed, next_slot, noise)
+                next_slot += len(freed)
     return DribbleReport(
         episodes.distances,
         episodes.ball_lost,
@@ -232,28 +243,52 @@ def running_ceiling(profile: str = "v19", n_players: int = 1000, cycles: int = 3
 
 
 class _Slots:
-    """The episode slots of one evaluation: their generators, and the results as they come in."""
+    """The episode slots of one evaluation: their uniforms (module docstring), and the results as they come in."""
 
     def __init__(self, n_episodes: int, seed: int, max_actions: int) -> None:
-        self.seed, self.max_actions = seed, max_actions
+        self.max_actions = max_actions
+        self.noise_size = max_actions * physics.N_UNIFORMS
+        self.block = self.noise_size + START_UNIFORMS
+        self._bits = np.random.Philox(key=seed)
+        self._key = self._bits.state["state"]["key"]
+        self._generator = np.random.Generator(self._bits)
         self.distances = np.zeros(n_episodes)
         self.ball_lost = np.zeros(n_episodes, dtype=bool)
         self.player_types = np.zeros((n_episodes, physics.TYPE_SIZE))
         self.start_states = np.zeros((n_episodes, physics.STATE_SIZE))
 
-    def start(self, lanes: DribbleLanes, lane_ids: np.ndarray, slots: np.ndarray, noise: np.ndarray) -> np.ndarray:
-        """Start slot ``slots[r]`` in lane ``lane_ids[r]``, its cycles' uniforms into ``noise[lane]``; their
-        observations."""
-        generators = [np.random.default_rng([self.seed, j]) for j in slots.tolist()]
-        for lane, generator in zip(lane_ids.tolist(), generators, strict=True):
-            noise[lane] = generator.random((self.max_actions, physics.N_UNIFORMS))
-        obs = lanes.start_from(lane_ids, generators)
+    def start(self, lanes: DribbleLanes, lane_ids: np.ndarray, first: int, noise: np.ndarray) -> np.ndarray:
+        """Start the slots ``first, first + 1, ...`` in ``lane_ids``, their cycles' uniforms into ``noise[lane]``;
+        returns their observations."""
+        blocks = self._draw((first * self.block // 4, 0, 0, 0), (len(lane_ids), self.block))
+        noise[lane_ids] = blocks[:, : self.noise_size].reshape(len(lane_ids), self.max_actions, physics.N_UNIFORMS)
+        obs, short = lanes.start_from(lane_ids, blocks[:, self.noise_size :])
+        for r in np.flatnonzero(short).tolist():  # a long run of rejected player types: continue on its own counters
+            row, extra = blocks[r : r + 1, self.noise_size :], START_UNIFORMS
+            while short[r]:
+                more = self._draw((0, first + r, 1, 0), (1, extra))
+                obs[r : r + 1], short[r : r + 1] = lanes.start_from(lane_ids[r : r + 1], np.concatenate((row, more), axis=1))
+                extra *= 2
+        slots = np.arange(first, first + len(lane_ids))
         self.player_types[slots] = lanes.types[lane_ids]
         self.start_states[slots] = lanes.state[lane_ids]
         return obs
 
     def record(self, slots: np.ndarray, distances: np.ndarray, ball_lost: np.ndarray) -> None:
         self.distances[slots], self.ball_lost[slots] = distances, ball_lost
+
+    def _draw(self, counter: tuple[int, int, int, int], shape: tuple[int, int]) -> np.ndarray:
+        """``shape`` uniforms of Philox(key=seed) from ``counter`` on (each counter value gives four)."""
+        self._bits.state = {
+            "bit_generator": "Philox",
+            "state": {"counter": np.array(counter, dtype=np.uint64), "key": self._key},
+            "buffer": np.zeros(4, dtype=np.uint64),
+            "buffer_pos": 4,
+            "has_uint32": 0,
+            "uinteger": 0,
+        }
+        values: np.ndarray = self._generator.random(shape)
+        return values
 
 
 def _check_integer(name: str, value: Any, minimum: int) -> None:

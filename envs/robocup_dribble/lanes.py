@@ -16,14 +16,13 @@ moved into the compiled loop) drew the type sets from a separately drawn pool.
 
 Two ways around that stream, for callers that need each episode's draws to be fixed by something other than the
 order of resets (common random numbers, :func:`robocup_dribble.evaluation.evaluate_dribbling`):
-:meth:`DribbleLanes.start_from` starts given lanes from caller-given generators (one each), and
+:meth:`DribbleLanes.start_from` starts given lanes from caller-given uniforms (a row each), and
 :meth:`DribbleLanes.step` takes a cycle's physics uniforms from the caller. Neither touches the stream above.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
@@ -229,34 +228,30 @@ class DribbleLanes:
                 self._uniforms = np.concatenate((self._uniforms[start:], self.rng.random(_DRAW_BLOCK)))
                 self._position[0] = 0
 
-    def start_from(self, lanes: np.ndarray, generators: Sequence[np.random.Generator]) -> np.ndarray:
-        """Start a new episode in each of ``lanes`` from its own generator (not from ``rng``); returns their
-        observations ``(len(lanes), 10)``.
+    def start_from(self, lanes: np.ndarray, uniforms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Start a new episode in each of ``lanes`` from caller-given uniforms (not from ``rng``).
 
-        Lane ``lanes[r]`` draws from ``generators[r]``, in the order of an episode start that begins a type set (the
-        module docstring): a fresh set of player types (:func:`draw_type_set`), ``player_types`` values that order it
-        (the episode plays the type with the smallest), and the six values of its start state. The lane's set is
-        that one set (its next episode started by :meth:`reset` or an autoreset plays the set's next type).
+        Lane ``lanes[r]`` reads row ``uniforms[r]`` from its beginning, in the order of an episode start that begins
+        a type set (the module docstring): a fresh set of player types (:func:`draw_type_set`; a v19 set takes about
+        120 values, a rare run of rejected types more), ``player_types`` values that order it (the episode plays the
+        type with the smallest), and the six values of its start state. The lane's set is that one set (an episode
+        it starts later through :meth:`reset` or an autoreset plays the set's next type).
 
-        :raises ValueError: for indices that are not integers in range or repeat, or a number of generators other
-            than ``len(lanes)``; nothing changes.
+        :param lanes: distinct lane indices.
+        :param uniforms: ``(len(lanes), M)`` values in [0, 1].
+        :return: the observations ``(len(lanes), 10)`` and ``(len(lanes),)`` bool ``short``: the row ran out before
+            the start was drawn; that lane is left as it was (and its observation row is meaningless): start it
+            again from a longer row.
+        :raises ValueError: for indices that are not integers in range or repeat, or uniforms that are not a
+            ``(len(lanes), M)`` array of values in [0, 1]; nothing changes.
         """
         index = self._checked_lanes(lanes)
-        if len(generators) != len(index):
-            raise ValueError(f"start_from needs one generator per lane ({len(index)}), got {len(generators)}")
-        rows = np.stack([generator.random(_START_BLOCK) for generator in generators]) if len(index) else np.empty((0, 1))
+        rows = physics.input_array("uniforms", uniforms, (len(index), None))
+        if not ((rows >= 0.0) & (rows <= 1.0)).all():
+            raise ValueError("uniforms must lie in [0, 1]")
         obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
-        for r in self._start_rows(index, rows, obs):  # its row ran short (a rare run of rejected types): extend it
-            row, short = rows[r : r + 1], True
-            while short:
-                row = np.concatenate((row, generators[r].random((1, row.shape[1]))), axis=1)
-                short = len(self._start_rows(index[r : r + 1], row, obs[r : r + 1])) > 0
-        return obs
-
-    def _start_rows(self, lanes: np.ndarray, rows: np.ndarray, obs: np.ndarray) -> np.ndarray:
-        """Start ``lanes[r]`` from ``rows[r]`` (a fresh type set); returns the ``r`` whose row ran short (those lanes
-        are left half-started: start them again from a longer row)."""
-        return _start_lanes_from_rows(self.arrays, self._settings, self.profile.player.player_types, lanes, rows, obs)
+        short = _start_lanes_from_rows(self.arrays, self._settings, self.profile.player.player_types, index, rows, obs)
+        return obs, short
 
     def _checked_uniforms(self, uniforms: np.ndarray) -> np.ndarray:
         given = physics.input_array("uniforms", uniforms, (self.n_lanes, physics.N_UNIFORMS))
@@ -314,7 +309,6 @@ def _first_invalid(kinds: np.ndarray, params: np.ndarray) -> int:
 
 
 _DRAW_BLOCK = 4096  # uniforms drawn from the Generator at least per refill of the buffer
-_START_BLOCK = 512  # uniforms drawn per lane by DribbleLanes.start_from (a v19 start takes about 145, rarely 240)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -468,40 +462,46 @@ def _step_lanes(
 @njit(cache=True, error_model="numpy")
 def _start_lanes_from_rows(a: LaneArrays, g: LaneSettings, player_types: int, lanes, rows, obs) -> np.ndarray:
     """Start each ``lanes[r]`` with a fresh type set from the uniforms ``rows[r]`` and write its observation to
-    ``obs[r]``; returns the ``r`` whose row ran short, in order."""
+    ``obs[r]``; returns ``short``: the row ran out (that lane is left as it was)."""
     k, c, _, _, obs_low, obs_high, recipe = g
     state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns = a
     type_set, order_keys = np.empty((1, player_types, a.types.shape[1])), np.empty(player_types)
+    # each start is drawn in lane 0 of scratch arrays and copied to its lane only if its row sufficed
+    s_state, s_types = np.empty((1, state.shape[1])), np.empty((1, types.shape[1]))
+    s_set_types = np.empty((1, set_types.shape[1], set_types.shape[2]))
+    s_set_ids = np.empty((1, set_ids.shape[1]), dtype=np.int64)
+    s_episodes, s_type_ids, s_steps = np.zeros(1, dtype=np.int64), np.empty(1, dtype=np.int64), np.empty(1, dtype=np.int64)
+    s_start_x, s_distance, s_returns = np.empty(1), np.empty(1), np.empty(1)
     position = np.zeros(1, dtype=np.int64)
-    short = np.empty(lanes.shape[0], dtype=np.int64)
-    n_short = 0
+    short = np.zeros(lanes.shape[0], dtype=np.bool_)
     for r in range(lanes.shape[0]):
-        i = lanes[r]
-        episodes_in_set[i] = 0
+        s_episodes[0] = 0
         position[0] = 0
-        started = _start_lane(
-            state,
-            types,
-            set_types,
-            set_ids,
-            episodes_in_set,
-            type_ids,
-            steps,
-            start_x,
-            distance,
-            returns,
+        short[r] = not _start_lane(
+            s_state,
+            s_types,
+            s_set_types,
+            s_set_ids,
+            s_episodes,
+            s_type_ids,
+            s_steps,
+            s_start_x,
+            s_distance,
+            s_returns,
             k,
             c,
             recipe,
-            i,
+            0,
             rows[r],
             position,
             type_set,
             order_keys,
         )
-        if started:
-            task.observe(state, i, types, i, obs_low, obs_high, obs, r)
-        else:
-            short[n_short] = r
-            n_short += 1
-    return short[:n_short]
+        if short[r]:
+            continue
+        i = lanes[r]
+        state[i], types[i], set_types[i], set_ids[i] = s_state[0], s_types[0], s_set_types[0], s_set_ids[0]
+        episodes_in_set[i], type_ids[i], steps[i] = s_episodes[0], s_type_ids[0], s_steps[0]
+        start_x[i], distance[i], returns[i] = s_start_x[0], s_distance[0], s_returns[0]
+        task.observe(state, i, types, i, obs_low, obs_high, obs, r)
+    return short
