@@ -174,6 +174,8 @@ def distance_bound(
     collision" (push added, next speed bounded by the largest after-collision speed) bounds every episode; the
     ball is ignored, which only loosens the bound. The result is x after ``max_actions`` cycles minus the start x
     (the episode's distance is x at some cycle minus the start x, and the bounded gains are never negative).
+    With polar noise the bound equals a ballless run of full dashes along +x with the start velocity turned to +x
+    and every cycle's noise at full length along +x, plus one push-out; with box noise it is up to about 2 m above.
 
     :raises ValueError: for arrays of other shapes, or a type whose ``decay * (1 + r) > 1`` (the speed bound would
         not stay below ``max(|v0|, player_speed_max)``; no profile's types come near it).

@@ -85,7 +85,8 @@ class DribbleLanes:
     :param n_lanes: number of lanes.
     :param profile: server profile (noise already decided).
     :param task_settings: the task's settings.
-    :param rng: the generator every random draw comes from (types, starts, noise), in the order the module states.
+    :param rng: the generator of random stream version 2 (types, starts, noise, in the order the module states), for
+        all but what :meth:`start_from` and ``step(..., uniforms=...)`` are given.
     """
 
     def __init__(self, n_lanes: int, profile: ServerProfile, task_settings: DribbleTask, rng: np.random.Generator) -> None:
