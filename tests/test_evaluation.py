@@ -182,3 +182,34 @@ def test_step_refuses_bad_uniforms_and_changes_nothing():
     np.testing.assert_array_equal(lanes.state, before)
     a = lanes.step(kinds, params, autoreset=False, uniforms=np.full((2, physics.N_UNIFORMS), 0.5))
     assert a.observations.shape == (2, 10)
+
+
+def test_distance_bound_holds_for_random_commands_noise_and_collisions(profile):
+    """Straight to the physics, without the task's ball-loss end: mostly full dashes along +x mixed with random
+    dashes, kicks (which send the ball into the player now and then) and turns, and random noise (for half the
+    players, their movement noise at full length along +x); the player's x never gets further from its start than
+    the bound, in any cycle."""
+    report = evaluate_dribbling(DashStraight(), 400, profile, seed=21, n_lanes=100)
+    server_profile, task_settings = configure(profile, True, None, {})
+    s = server_profile.server
+    rng = np.random.default_rng(0)
+    state, types = report.start_states.copy(), report.player_types
+    constants = physics.profile_constants(server_profile)
+    n = len(types)
+    furthest, collisions = np.zeros(n), 0
+    for _ in range(task_settings.max_actions):
+        commands = np.zeros((n, physics.COMMAND_SIZE))
+        kinds = rng.choice([physics.CMD_DASH, physics.CMD_KICK, physics.CMD_TURN], size=n, p=[0.8, 0.15, 0.05])
+        commands[:, physics.C_KIND] = kinds
+        commands[:, physics.C_POWER] = np.where(
+            kinds == physics.CMD_KICK, rng.uniform(0, s.max_power, n), rng.uniform(0.8, 1.0, n) * s.max_dash_power
+        )
+        commands[:, physics.C_DIRECTION] = np.where(rng.random(n) < 0.7, 0.0, rng.uniform(-180, 180, n))
+        uniforms = rng.random((n, physics.N_UNIFORMS))
+        uniforms[: n // 2, physics.U_PLAYER_R], uniforms[: n // 2, physics.U_PLAYER_A] = 1.0, 0.5  # noise along +x
+        events = physics.step(state, types, commands, uniforms, constants)
+        collisions += int(events[:, physics.E_COLLISION].sum())
+        furthest = np.maximum(furthest, state[:, physics.P_X] - report.start_states[:, physics.P_X])
+    assert collisions > 0
+    assert (furthest <= report.distance_bounds).all()
+    assert (furthest / report.distance_bounds).max() > 0.8  # some come close: the check has teeth
