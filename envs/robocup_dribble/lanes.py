@@ -13,6 +13,11 @@ starts the next one (in lane order), taking, if its type set is used up, a new s
 ``player_types`` values that order it, and then the six values of its start state
 (:func:`robocup_dribble.task.start_lane`). This is random stream version 2; version 1 (before the episode starts
 moved into the compiled loop) drew the type sets from a separately drawn pool.
+
+Two ways around that stream, for callers that need each episode's draws to be fixed by something other than the
+order of resets (common random numbers, :func:`robocup_dribble.evaluation.evaluate_dribbling`):
+:meth:`DribbleLanes.start_from` starts given lanes from caller-given uniforms (a row each), and
+:meth:`DribbleLanes.step` takes a cycle's physics uniforms from the caller. Neither touches the stream above.
 """
 
 from __future__ import annotations
@@ -80,7 +85,8 @@ class DribbleLanes:
     :param n_lanes: number of lanes.
     :param profile: server profile (noise already decided).
     :param task_settings: the task's settings.
-    :param rng: the generator every random draw comes from (types, starts, noise), in the order the module states.
+    :param rng: the generator of random stream version 2 (types, starts, noise, in the order the module states), for
+        all but what :meth:`start_from` and ``step(..., uniforms=...)`` are given.
     """
 
     def __init__(self, n_lanes: int, profile: ServerProfile, task_settings: DribbleTask, rng: np.random.Generator) -> None:
@@ -145,6 +151,12 @@ class DribbleLanes:
 
         :raises ValueError: for indices that are not integers in range or repeat; nothing changes.
         """
+        index = self._checked_lanes(lanes)
+        obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
+        self._start(index, obs, by_row=True)
+        return obs
+
+    def _checked_lanes(self, lanes: np.ndarray) -> np.ndarray:
         index = np.asarray(lanes)
         if index.ndim != 1 or index.dtype.kind not in "iu":
             raise ValueError(f"lanes must be a 1-D integer array, got {index!r:.200}")
@@ -153,19 +165,23 @@ class DribbleLanes:
             raise ValueError(f"lanes must lie in 0..{self.n_lanes - 1}, got {index!r:.200}")
         if len(np.unique(index)) != len(index):
             raise ValueError(f"lanes must be distinct, got {index!r:.200}")
-        obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
-        self._start(index, obs, by_row=True)
-        return obs
+        return index
 
-    def step(self, action_types: np.ndarray, params: np.ndarray, autoreset: bool = True) -> LaneStep:
+    def step(
+        self, action_types: np.ndarray, params: np.ndarray, autoreset: bool = True, uniforms: np.ndarray | None = None
+    ) -> LaneStep:
         """Advance every lane by one action (one server cycle); with ``autoreset`` start the next episode of every
         lane whose episode ended.
 
         :param action_types: ``(N,)`` integers in 0..3.
         :param params: ``(N, 7)`` finite parameters; out-of-range values are clipped to the bounds.
-        :raises ValueError: for a wrong shape, an action type outside 0..3 or a non-finite parameter; nothing changes.
+        :param uniforms: ``(N, physics.N_UNIFORMS)`` values in [0, 1] for this cycle's physics noise (row ``i`` for
+            lane ``i``, roles ``physics.U_*``) instead of drawing them from ``rng`` (episode starts still draw from it).
+        :raises ValueError: for a wrong shape, an action type outside 0..3, a non-finite parameter or uniforms that
+            are not an ``(N, N_UNIFORMS)`` array of values in [0, 1]; nothing changes.
         """
         kinds, params = self._checked(action_types, params)
+        given = None if uniforms is None else self._checked_uniforms(uniforms)
         n = self.n_lanes
         out = LaneStep(
             observations=np.empty((n, task.N_OBSERVATIONS), dtype=np.float32),
@@ -177,7 +193,7 @@ class DribbleLanes:
             episode_returns=np.zeros(n),
             episode_lengths=np.zeros(n, dtype=np.int64),
         )
-        physics_uniforms = self._take(n * physics.N_UNIFORMS).reshape(n, physics.N_UNIFORMS)
+        physics_uniforms = self._take(n * physics.N_UNIFORMS).reshape(n, physics.N_UNIFORMS) if given is None else given
         # separate arrays, in LaneStep's order for the outputs: numba unpacks them faster than NamedTuples
         ended = _step_lanes(*self._step_arrays, kinds, params, physics_uniforms, *out)
         if autoreset and len(ended):
@@ -212,6 +228,37 @@ class DribbleLanes:
                 start = int(self._position[0])
                 self._uniforms = np.concatenate((self._uniforms[start:], self.rng.random(_DRAW_BLOCK)))
                 self._position[0] = 0
+
+    def start_from(self, lanes: np.ndarray, uniforms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Start a new episode in each of ``lanes`` from caller-given uniforms (not from ``rng``).
+
+        Lane ``lanes[r]`` reads row ``uniforms[r]`` from its beginning, in the order of an episode start that begins
+        a type set (the module docstring): a fresh set of player types (:func:`draw_type_set`; a v19 set takes about
+        120 values, a rare run of rejected types more), ``player_types`` values that order it (the episode plays the
+        type with the smallest), and the six values of its start state. The lane's set is that one set (an episode
+        it starts later through :meth:`reset` or an autoreset plays the set's next type).
+
+        :param lanes: distinct lane indices.
+        :param uniforms: ``(len(lanes), M)`` values in [0, 1].
+        :return: the observations ``(len(lanes), 10)`` and ``(len(lanes),)`` bool ``short``: the row ran out before
+            the start was drawn; that lane is left as it was (and its observation row is meaningless): start it
+            again from a longer row.
+        :raises ValueError: for indices that are not integers in range or repeat, or uniforms that are not a
+            ``(len(lanes), M)`` array of values in [0, 1]; nothing changes.
+        """
+        index = self._checked_lanes(lanes)
+        rows = physics.input_array("uniforms", uniforms, (len(index), None))
+        if not ((rows >= 0.0) & (rows <= 1.0)).all():
+            raise ValueError("uniforms must lie in [0, 1]")
+        obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
+        short = _start_lanes_from_rows(self.arrays, self._settings, self.profile.player.player_types, index, rows, obs)
+        return obs, short
+
+    def _checked_uniforms(self, uniforms: np.ndarray) -> np.ndarray:
+        given = physics.input_array("uniforms", uniforms, (self.n_lanes, physics.N_UNIFORMS))
+        if not ((given >= 0.0) & (given <= 1.0)).all():
+            raise ValueError("uniforms must lie in [0, 1]")
+        return given
 
     def player_type(self, lane: int) -> PlayerType:
         """The player type of a lane's current episode."""
@@ -411,3 +458,51 @@ def _step_lanes(
             ended[n_ended] = i
             n_ended += 1
     return ended[:n_ended]
+
+
+@njit(cache=True, error_model="numpy")
+def _start_lanes_from_rows(a: LaneArrays, g: LaneSettings, player_types: int, lanes, rows, obs) -> np.ndarray:
+    """Start each ``lanes[r]`` with a fresh type set from the uniforms ``rows[r]`` and write its observation to
+    ``obs[r]``; returns ``short``: the row ran out (that lane is left as it was)."""
+    k, c, _, _, obs_low, obs_high, recipe = g
+    state, types, set_types, set_ids, episodes_in_set, type_ids, steps, start_x, distance, returns = a
+    type_set, order_keys = np.empty((1, player_types, a.types.shape[1])), np.empty(player_types)
+    # each start is drawn in lane 0 of scratch arrays and copied to its lane only if its row sufficed
+    s_state, s_types = np.empty((1, state.shape[1])), np.empty((1, types.shape[1]))
+    s_set_types = np.empty((1, set_types.shape[1], set_types.shape[2]))
+    s_set_ids = np.empty((1, set_ids.shape[1]), dtype=np.int64)
+    s_episodes, s_type_ids, s_steps = np.zeros(1, dtype=np.int64), np.empty(1, dtype=np.int64), np.empty(1, dtype=np.int64)
+    s_start_x, s_distance, s_returns = np.empty(1), np.empty(1), np.empty(1)
+    position = np.zeros(1, dtype=np.int64)
+    short = np.zeros(lanes.shape[0], dtype=np.bool_)
+    for r in range(lanes.shape[0]):
+        s_episodes[0] = 0
+        position[0] = 0
+        short[r] = not _start_lane(
+            s_state,
+            s_types,
+            s_set_types,
+            s_set_ids,
+            s_episodes,
+            s_type_ids,
+            s_steps,
+            s_start_x,
+            s_distance,
+            s_returns,
+            k,
+            c,
+            recipe,
+            0,
+            rows[r],
+            position,
+            type_set,
+            order_keys,
+        )
+        if short[r]:
+            continue
+        i = lanes[r]
+        state[i], types[i], set_types[i], set_ids[i] = s_state[0], s_types[0], s_set_types[0], s_set_ids[0]
+        episodes_in_set[i], type_ids[i], steps[i] = s_episodes[0], s_type_ids[0], s_steps[0]
+        start_x[i], distance[i], returns[i] = s_start_x[0], s_distance[0], s_returns[0]
+        task.observe(state, i, types, i, obs_low, obs_high, obs, r)
+    return short

@@ -106,7 +106,7 @@ class DribbleVecEnv(VecEnv):
         if actions is None or len(actions) != self.num_envs:
             got = None if actions is None else len(actions)
             raise ValueError(f"step() needs one action per lane ({self.num_envs}), got {got}")
-        return self.step_packed(*_parse_actions(actions))
+        return self.step_packed(*parse_actions(actions))
 
     def step_arrays(self, action_types: np.ndarray, params: np.ndarray) -> ArrayStep:
         """Step all lanes with ``(N,)`` action types and ``(N, 7)`` parameters (``robocup_dribble.skills.PARAM_*``
@@ -208,7 +208,7 @@ class DribbleVecEnv(VecEnv):
         return self._renderer
 
 
-def _parse_actions(actions: np.ndarray | Sequence[Any]) -> tuple[np.ndarray, np.ndarray]:
+def parse_actions(actions: np.ndarray | Sequence[Any]) -> tuple[np.ndarray, np.ndarray]:
     """N per-lane Tuple actions -> ``(N,)`` int64 action types and ``(N, 7)`` parameters.
 
     The common case (integer types, real numpy parameter vectors of one dtype and the right sizes, as SB3 policies
