@@ -92,7 +92,7 @@ def _plot_group(ax, group: Group, x: str, label: str | None = None) -> None:
 
 
 def _references(ax, env_id: str, reference: dict[str, Any] | None, legend: bool = True) -> None:
-    """Horizontal reference lines: the hand-coded dribbler and the ceiling row's figure, or Platform's published ones."""
+    """Horizontal reference lines: the hand-coded dribbler and the upper bound, or Platform's published figures."""
     if not domains.is_dribbling(env_id):
         for (name, value, _), style in zip(domains.PLATFORM_REFERENCES, ("--", ":", "-.", (0, (1, 3))), strict=True):
             ax.axhline(value, color="0.3", ls=style, lw=1.1, label=f"{name}, published ({value:.3g})" if legend else None)
@@ -101,10 +101,9 @@ def _references(ax, env_id: str, reference: dict[str, Any] | None, legend: bool 
         return
     ref = reference["references"]
     hand = ref["handcoded"]["final"]["distance_mean"]
-    ceiling = ref["ceiling"]["mean"]
-    label = ref["ceiling"].get("label", "running ceiling, no ball")
+    bound = ref["bound"]["mean"]
     ax.axhline(hand, color="black", ls="--", lw=1.2, label=f"hand-coded dribbler ({hand:.1f} m)" if legend else None)
-    ax.axhline(ceiling, color="0.45", ls=":", lw=1.5, label=f"{label} ({ceiling:.1f} m)" if legend else None)
+    ax.axhline(bound, color="0.45", ls=":", lw=1.5, label=f"{ref['bound']['label']} ({bound:.1f} m)" if legend else None)
 
 
 def _axes_style(ax, env_id: str, xlabel: str, ymax: float) -> None:
@@ -123,7 +122,7 @@ def _thousands():
 def _ymax(references: dict[str, Any], env_ids: list[str], groups: list[Group]) -> float:
     if not any(domains.is_dribbling(e) for e in env_ids):
         return 1.05
-    top = [r["references"]["ceiling"]["mean"] for e, r in references.items() if e in env_ids]
+    top = [r["references"]["bound"]["mean"] for e, r in references.items() if e in env_ids]
     top += [float(np.max(g.curve()[1])) for g in groups]
     return max([25.0, *top]) * 1.08
 
@@ -266,13 +265,13 @@ def final_figure(out: Path, groups: dict[str, list[Group]], references: dict[str
             ax.set_ylim(-0.6, len(gs) + 0.1)
         elif ref:
             hand = ref["references"]["handcoded"]["final"]["distance_mean"]
-            ceiling = ref["references"]["ceiling"]["mean"]
+            bound = ref["references"]["bound"]["mean"]
             ax.axvline(hand, color="black", ls="--", lw=1.2)
-            ax.axvline(ceiling, color="0.45", ls=":", lw=1.5)
+            ax.axvline(bound, color="0.45", ls=":", lw=1.5)
             top = len(gs) - 0.35
             ax.text(hand, top, f" hand-coded {hand:.1f} m", va="bottom", ha="left", fontsize=8.5)
-            label = ref["references"]["ceiling"].get("label", "running ceiling")
-            ax.text(ceiling, top, f"{label} {ceiling:.1f} m ", va="bottom", ha="right", fontsize=8.5, color="0.35")
+            label = ref["references"]["bound"]["label"]
+            ax.text(bound, top, f"{label} {bound:.1f} m ", va="bottom", ha="right", fontsize=8.5, color="0.35")
             ax.set_ylim(-0.6, len(gs) + 0.1)
         ax.set_xlabel("final greedy dribble distance (m)" if domains.is_dribbling(env_id) else "final greedy mean return")
         ax.set_xlim(0, _ymax(references, [env_id], []) if ref or not domains.is_dribbling(env_id) else None)

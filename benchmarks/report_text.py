@@ -68,14 +68,14 @@ def md_table(header: list[str], rows: list[list[str]], align: str | None = None)
 
 
 def dribble_performance_table(groups: list[Group], reference: dict[str, Any] | None) -> str:
-    ceiling = reference["references"]["ceiling"]["mean"] if reference else None
+    bound = reference["references"]["bound"]["mean"] if reference else None
     header = [
         "config",
         "seeds",
         "env steps",
         "episodes",
         "final distance (m), IQM [95% CI]",
-        "% of ceiling",
+        "% of upper bound",
         "best curve point (m)",
         "max episode (m)",
         ">= 20 m",
@@ -84,7 +84,7 @@ def dribble_performance_table(groups: list[Group], reference: dict[str, Any] | N
     rows = []
     for g in groups:
         finals = g.final()
-        share = f"{100 * float(iqm(finals)) / ceiling:.0f}%" if ceiling else "n/a"
+        share = f"{100 * float(iqm(finals)) / bound:.0f}%" if bound else "n/a"
         best_point = np.mean([max(p[g.metric] for p in r["curve"]) for r in g.runs])
         rows.append(
             [
@@ -109,17 +109,17 @@ def dribble_performance_table(groups: list[Group], reference: dict[str, Any] | N
                 "-",
                 "-",
                 f"{hand['distance_mean']:.1f}",
-                f"{100 * hand['distance_mean'] / ceiling:.0f}%",
+                f"{100 * hand['distance_mean'] / bound:.0f}%",
                 "-",
                 f"{hand['distance_max']:.1f}",
                 f"{100 * hand['reach20_share']:.0f}%",
                 f"{100 * hand['ball_loss_rate']:.0f}%",
             ]
         )
-        c = reference["references"]["ceiling"]
+        c = reference["references"]["bound"]
         rows.append(
             [
-                f"*{c.get('label', 'running ceiling (no ball)')}*",
+                f"*{c['label']}*",
                 "-",
                 "-",
                 "-",

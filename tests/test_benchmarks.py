@@ -59,7 +59,12 @@ def test_tiny_grid_writes_cells_models_and_tensorboard(tiny_run):
         if cell.algo == "Reference":
             refs = result["references"]
             assert refs["handcoded"]["final"]["episodes"] == 40
-            assert refs["ceiling"]["mean"] > 20  # metres in 35 full dashes
+            bound = refs["bound"]
+            assert bound["mean"] > 20 and len(bound["episode_bounds"]) == 40
+            # no episode of the dribbler's goes past its bound (the same episodes: common random numbers)
+            assert all(
+                d <= b for d, b in zip(refs["handcoded"]["final"]["episode_scores"], bound["episode_bounds"], strict=True)
+            )
             continue
         curve = result["curve"]
         assert curve[0]["episodes"] == 0 and curve[0]["env_steps"] == 0  # a point before training
@@ -316,7 +321,14 @@ def test_report_from_synthetic_cells(tmp_path):
                 },
                 "predict_us": 900.0,
             },
-            "ceiling": {"players": 1000, "mean": 38.8, "median": 40.9, "min": 29.8, "max": 41.6, "cycles": 35},
+            "bound": {
+                "label": "upper bound (any policy)",
+                "episodes": 1000,
+                "mean": 44.7,
+                "median": 45.0,
+                "min": 39.8,
+                "max": 47.6,
+            },
         },
         "wall_s": 5.0,
     }
@@ -345,7 +357,7 @@ def test_report_from_synthetic_cells(tmp_path):
         "episodes to 20 m",
         "decision cost (us/action)",
         "hand-coded dribbler",
-        "running ceiling",
+        "upper bound (any policy)",
         "paper's claim",
         "RBF arrays: 25 m in under 10,000 episodes",
         "most players run at least 18 m",

@@ -33,8 +33,7 @@ import numpy as np
 from robocup_dribble import physics
 from robocup_dribble.env import configure
 from robocup_dribble.lanes import DribbleLanes
-from robocup_dribble.params import EPS, ServerProfile, make_profile, without_noise
-from robocup_dribble.player_types import draw_type_table
+from robocup_dribble.params import EPS, ServerProfile
 from robocup_dribble.task import DribbleTask
 from robocup_dribble.vec_env import parse_actions
 
@@ -216,32 +215,6 @@ def distance_bound(
     with_collision = run[:, 1:] + push[:, None] + reached[:, 1:]
     bound: np.ndarray = np.maximum(run[:, cycles], with_collision.max(axis=1))
     return bound
-
-
-def running_ceiling(profile: str = "v19", n_players: int = 1000, cycles: int = 35, seed: int = 0) -> np.ndarray:
-    """Metres each of ``n_players`` fresh players covers in ``cycles`` full-power dashes along +x from rest, with no
-    ball and no noise.
-
-    Not a bound on an evaluation's episodes (other players, and their start speed and the noise can add distance:
-    a start at 0.3 m/cycle already beats it); :func:`distance_bound` is one. Kept until the benchmark scripts
-    switch to :attr:`DribbleReport.distance_bounds`.
-    """
-    server_profile = without_noise(make_profile(profile))
-    rng = np.random.default_rng(seed)
-    n_sets = -(-n_players // server_profile.player.player_types)
-    types = draw_type_table(server_profile, n_sets, lambda low, high, size: low + (high - low) * rng.random(size))
-    types = types.reshape(-1, physics.TYPE_SIZE)[:n_players]
-    state = physics.new_state(len(types))
-    physics.recover(state, types, server_profile)
-    state[:, physics.B_Y] = 1e3  # the ball is far away
-    commands = np.zeros((len(types), physics.COMMAND_SIZE))
-    commands[:, physics.C_KIND], commands[:, physics.C_POWER] = physics.CMD_DASH, server_profile.server.max_dash_power
-    uniforms = np.full((len(types), physics.N_UNIFORMS), 0.5)
-    constants = physics.profile_constants(server_profile)
-    for _ in range(cycles):
-        physics.step(state, types, commands, uniforms, constants)
-    distances: np.ndarray = state[:, physics.P_X].copy()
-    return distances
 
 
 class _Slots:
