@@ -88,8 +88,10 @@ class SarsaAAC(BaseAlgorithm):
     Exploration (chosen by us; the paper does not describe it, and without it the CACLA update would be a
     no-op): epsilon-greedy (or Boltzmann) over action types and Gaussian noise of standard deviation
     ``param_noise`` on the scaled parameters; both decay linearly over the first ``exploration_fraction`` of
-    training. Executed parameters are clipped to the action space's bounds. Schedules (exploration and learning
-    rates) are re-evaluated every 0.1% of training progress rather than at every step.
+    training, or, if ``exploration_episodes`` is given, over that many finished episodes (counted over all lanes,
+    since the model was created), whatever the budget. Executed parameters are clipped to the action space's
+    bounds. Schedules of progress (exploration and learning rates) are re-evaluated every 0.1% of training
+    progress rather than at every step; the episode schedule at every episode end.
 
     Every approximator takes normalised steps (see :mod:`sb3_aac.common.approximators`): for one sample a learning
     rate of 1 moves a linear approximator's output onto its target, and for a batch of lanes the summed step is
@@ -132,7 +134,9 @@ class SarsaAAC(BaseAlgorithm):
     :param type_exploration: ``"epsilon_greedy"``, or ``"boltzmann"`` (softmax over Q with temperature given by
         the exploration schedule, in units of ``return_scale``)
     :param exploration_fraction: Fraction of the training period over which the exploration rate and the
-        parameter noise decay
+        parameter noise decay (unused if ``exploration_episodes`` is given)
+    :param exploration_episodes: If given, the exploration rate and the parameter noise decay over this many
+        finished episodes instead, so the schedule does not depend on ``total_timesteps``
     :param exploration_initial_eps: Initial epsilon (or temperature for Boltzmann exploration)
     :param exploration_final_eps: Final epsilon (or temperature)
     :param param_noise_initial: Initial standard deviation of the Gaussian noise on the scaled parameters
@@ -181,6 +185,7 @@ class SarsaAAC(BaseAlgorithm):
         gamma: float = 0.9,
         type_exploration: str = "epsilon_greedy",
         exploration_fraction: float = 0.5,
+        exploration_episodes: int | None = None,
         exploration_initial_eps: float = 0.3,
         exploration_final_eps: float = 0.05,
         param_noise_initial: float = 0.3,
@@ -222,6 +227,7 @@ class SarsaAAC(BaseAlgorithm):
         self.gamma = gamma
         self.type_exploration = type_exploration
         self.exploration_fraction = exploration_fraction
+        self.exploration_episodes = exploration_episodes
         self.exploration_initial_eps = exploration_initial_eps
         self.exploration_final_eps = exploration_final_eps
         self.param_noise_initial = param_noise_initial
@@ -256,6 +262,11 @@ class SarsaAAC(BaseAlgorithm):
             raise ValueError(f"gamma must be in [0, 1], got {self.gamma}")
         if not 0 < self.exploration_fraction <= 1:
             raise ValueError(f"exploration_fraction must be in (0, 1], got {self.exploration_fraction}")
+        episodes = self.exploration_episodes
+        if episodes is not None and not (
+            isinstance(episodes, (int, np.integer)) and not isinstance(episodes, bool) and episodes >= 1
+        ):
+            raise ValueError(f"exploration_episodes must be None or a whole number of episodes >= 1, got {episodes!r}")
         for name in ("exploration_initial_eps", "exploration_final_eps", "param_noise_initial", "param_noise_final"):
             if not (isinstance(getattr(self, name), (int, float, np.floating)) and 0 <= getattr(self, name) < math.inf):
                 raise ValueError(f"{name} must be a finite number >= 0, got {getattr(self, name)!r}")
@@ -273,11 +284,11 @@ class SarsaAAC(BaseAlgorithm):
         self._setup_lr_schedule()
         self.q_lr_schedule = FloatSchedule(self.q_learning_rate)
         self.param_lr_schedule = FloatSchedule(self.param_learning_rate)
-        fraction = self.exploration_fraction
+        # By episodes the schedules read 1 - episodes / exploration_episodes (see _exploration_progress).
+        fraction = self.exploration_fraction if self.exploration_episodes is None else 1.0
         self.exploration_schedule = LinearSchedule(self.exploration_initial_eps, self.exploration_final_eps, fraction)
         self.param_noise_schedule = LinearSchedule(self.param_noise_initial, self.param_noise_final, fraction)
-        self.exploration_rate = self.exploration_schedule(self._current_progress_remaining)
-        self.param_noise = self.param_noise_schedule(self._current_progress_remaining)
+        self._update_exploration()
         self.set_random_seed(self.seed)
         # SB3 types policy_class as type[BasePolicy]; __init__ checked that it is a SarsaAACPolicy.
         self.policy = self.policy_class(self.observation_space, self.action_space, **self.policy_kwargs)  # type: ignore[assignment]
@@ -466,12 +477,20 @@ class SarsaAAC(BaseAlgorithm):
     def _update_schedules(self) -> None:
         """Evaluate the exploration and learning-rate schedules at the current progress."""
         progress = self._schedule_progress = self._current_progress_remaining
-        self.exploration_rate = self.exploration_schedule(progress)
-        self.param_noise = self.param_noise_schedule(progress)
+        self._update_exploration()
         policy, lr = self.policy, self._lr
         lr[policy.q_slice] = self.q_lr_schedule(progress)
         lr[policy.param_slice] = self.param_lr_schedule(progress)
         lr[policy.value_index] = self.lr_schedule(progress)
+
+    def _update_exploration(self) -> None:
+        """The exploration rate and parameter noise at the current progress (of training, or of the episodes)."""
+        if self.exploration_episodes is None:
+            progress = self._current_progress_remaining
+        else:
+            progress = max(0.0, 1.0 - self._episode_num / self.exploration_episodes)
+        self.exploration_rate = self.exploration_schedule(progress)
+        self.param_noise = self.param_noise_schedule(progress)
 
     def _train_step(
         self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[Mapping[str, Any]], any_done: bool
@@ -675,6 +694,8 @@ class SarsaAAC(BaseAlgorithm):
                 if key in infos[i]:
                     buffer.append(float(infos[i][key]))
         self._episode_num += int(dones.sum())
+        if self.exploration_episodes is not None and self._episode_num <= self.exploration_episodes + len(dones):
+            self._update_exploration()
         episodes, timesteps = self._last_dump
         if (
             log_interval is not None
