@@ -263,8 +263,9 @@ class SarsaAAC(BaseAlgorithm):
         if not 0 < self.exploration_fraction <= 1:
             raise ValueError(f"exploration_fraction must be in (0, 1], got {self.exploration_fraction}")
         episodes = self.exploration_episodes
+        # A run-time check of user input that the annotation cannot guarantee.
         if episodes is not None and not (
-            isinstance(episodes, (int, np.integer)) and not isinstance(episodes, bool) and episodes >= 1
+            isinstance(episodes, (int, np.integer)) and not isinstance(episodes, bool) and episodes >= 1  # type: ignore[redundant-expr]
         ):
             raise ValueError(f"exploration_episodes must be None or a whole number of episodes >= 1, got {episodes!r}")
         for name in ("exploration_initial_eps", "exploration_final_eps", "param_noise_initial", "param_noise_final"):
