@@ -142,3 +142,16 @@ def test_save_load_with_traces(tmp_path):
 def test_bad_trace_settings(policy, kwargs, message):
     with pytest.raises(ValueError, match=message):
         SarsaAAC(policy, ParameterizedTargetEnv(), **kwargs)
+
+
+def test_traces_train_alike_on_the_array_path_and_the_tuple_path():
+    """Per-lane traces, cleared where episodes end: the same training whichever way the env is stepped."""
+    from tests.test_sarsa_aac_scale_free import ArrayTargetVecEnv, TupleOnly
+
+    weights = []
+    for env_class in (ArrayTargetVecEnv, TupleOnly):
+        model = SarsaAAC("TilePolicy", env_class(4), trace_lambda=0.8, seed=0, info_keywords=("distance",))
+        model.learn(2_000, log_interval=None)
+        weights.append(model.policy.approximators.tile_weight.numpy().copy())
+    np.testing.assert_array_equal(*weights)
+    assert weights[0].any()
