@@ -6,6 +6,11 @@ Learning targets of SarsaAAC (issue 8): train each (task, policy) on several see
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-tile --seeds 5 --steps 80000 --eval-every 5000
 
+Issue 8's targets, one pair at a time (a full run is long), each with ``--seeds 5 --eval-every 10000``:
+``paper-tile`` (25 m within 5,000 episodes; metres at the budget), ``v19-tile`` (25.4 m), ``paper-mlp2`` and
+``paper-rbfmlp2`` (16 m; add ``--steps`` for 40,000 and 15,000 episodes), ``paper-rbf50`` (25 m within 10,000
+episodes), ``nav-tile`` (0.9 success within 300k steps), ``platform-tile`` (0.98 mean return).
+
 Scores: the mean dribbled distance in metres over 500 greedy episodes on fresh players (the dribbling envs), the
 mean return over 200 greedy episodes (Platform-v0, the toy env), the greedy success rate over 500 episodes (the
 navigation env). Each line prints the per-seed scores, their mean and their interquartile mean (IQM), the
