@@ -17,7 +17,8 @@ Targets (issue 12): RbfPolicy (10 per input) >= 300k env steps/s on ``DribbleVec
 ``DribbleVecEnv`` >= 20x PPO and >= 3x DQN (the "SarsaAAC+DribbleVecEnv" column's ratios).
 
 Usage: ``python benchmarks/algo_speed.py [--steps 20000] [--n-envs 16] [--policy RbfPolicy] [--torch-threads 1]
-[--lanes 256] [--n-rbf 10 30 50]``
+[--lanes 256] [--n-rbf 10 30 50] [--set trace_lambda=0.7 ...]`` (``--set``: SarsaAAC keyword arguments as Python
+literals; ``--n-rbf`` with no value skips the RBF cost growth, e.g. for ``--policy TilePolicy``)
 
 Single runs on a shared machine: repeat them, and report the load average next to the numbers.
 """
@@ -25,6 +26,7 @@ Single runs on a shared machine: repeat them, and report the load average next t
 from __future__ import annotations
 
 import argparse
+import ast
 import os
 import statistics
 import time
@@ -90,16 +92,22 @@ class NullArrayEnv(VecEnv):
         pass
 
 
+# SarsaAAC keyword arguments from --set (e.g. trace_lambda), for every SarsaAAC measurement.
+SARSA_SETTINGS: dict = {}
+
+
 def build(algo: str, env_id: str, n_envs: int, policy: str, policy_kwargs: dict | None = None):
     if algo == "SarsaAAC":
-        return SarsaAAC(policy, make_vec_env(env_id, n_envs=n_envs, seed=0), seed=0, policy_kwargs=policy_kwargs)
+        env = make_vec_env(env_id, n_envs=n_envs, seed=0)
+        return SarsaAAC(policy, env, seed=0, policy_kwargs=policy_kwargs, **SARSA_SETTINGS)
     if algo == "SarsaAAC+NullArrayEnv":
         spaces_env = gym.make(env_id)
         env = NullArrayEnv(n_envs, spaces_env.observation_space, spaces_env.action_space)
-        return SarsaAAC(policy, env, seed=0, info_keywords=(), policy_kwargs=policy_kwargs)
+        return SarsaAAC(policy, env, seed=0, policy_kwargs=policy_kwargs, **{"info_keywords": (), **SARSA_SETTINGS})
     if algo == "SarsaAAC+DribbleVecEnv":
         profile = gym.spec(env_id).kwargs["profile"]
-        return SarsaAAC(policy, robocup_dribble.DribbleVecEnv(n_envs, profile=profile), seed=0, policy_kwargs=policy_kwargs)
+        env = robocup_dribble.DribbleVecEnv(n_envs, profile=profile)
+        return SarsaAAC(policy, env, seed=0, policy_kwargs=policy_kwargs, **SARSA_SETTINGS)
     if algo == "PPO":
         # Defaults, with the rollout kept at 2048 transitions whatever the number of envs.
         env = make_vec_env(env_id, n_envs=n_envs, seed=0, wrapper_class=FlattenParameterizedAction)
@@ -132,14 +140,19 @@ def main() -> None:
     parser.add_argument("--n-envs", type=int, nargs="+", default=[16])
     parser.add_argument("--policy", default="RbfPolicy", help="SarsaAAC policy")
     parser.add_argument("--lanes", type=int, default=256, help="lanes of the DribbleVecEnv and NullArrayEnv measurements")
-    parser.add_argument("--n-rbf", type=int, nargs="+", default=[10, 30, 50], help="RBFs per input for the cost growth")
+    parser.add_argument(
+        "--n-rbf", type=int, nargs="*", default=[10, 30, 50], help="RBFs per input for the cost growth (none: skip it)"
+    )
+    parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="SarsaAAC keyword arguments")
     parser.add_argument(
         "--torch-threads", type=int, default=1, help="torch threads for PPO/DQN (1 is fastest at these sizes on a busy box)"
     )
     args = parser.parse_args()
     th.set_num_threads(args.torch_threads)
+    SARSA_SETTINGS.update({key: ast.literal_eval(value) for key, value in (item.split("=", 1) for item in args.set)})
     print(
-        f"{args.env}; torch threads {th.get_num_threads()}; {args.steps} steps per measurement; SarsaAAC {args.policy}; "
+        f"{args.env}; torch threads {th.get_num_threads()}; {args.steps} steps per measurement; SarsaAAC {args.policy} "
+        f"{SARSA_SETTINGS or ''}; "
         f"load average {os.getloadavg()[0]:.1f}"
     )
     print(
@@ -162,7 +175,8 @@ def main() -> None:
         )
     lanes = args.lanes
     steps = max(args.steps, 200 * lanes)
-    print(f"\nSarsaAAC {args.policy} on DribbleVecEnv({lanes}), array path: cost growth with RBFs per input")
+    if args.n_rbf:
+        print(f"\nSarsaAAC {args.policy} on DribbleVecEnv({lanes}), array path: cost growth with RBFs per input")
     base = None
     for n_rbf in args.n_rbf:
         rate = steps_per_second("SarsaAAC+DribbleVecEnv", args.env, lanes, steps, args.policy, {"n_rbf": n_rbf})

@@ -4,11 +4,20 @@ Learning targets of SarsaAAC (issue 8): train each (task, policy) on several see
     PYTHONPATH=.:envs python -m benchmarks.learning --seeds 3
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-mlp2,nav-tile --seeds 5
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
+    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-tile --seeds 5 --steps 80000 --eval-every 5000
+
+Issue 8's targets, one pair at a time (a full run is long), each with ``--seeds 5 --eval-every 10000``:
+``paper-tile`` (25 m within 5,000 episodes; metres at the budget), ``v19-tile`` (25.4 m), ``paper-mlp2`` and
+``paper-rbfmlp2`` (16 m; add ``--steps`` for 40,000 and 15,000 episodes), ``paper-rbf50`` (25 m within 10,000
+episodes), ``nav-tile`` (0.9 success within 300k steps), ``platform-tile`` (0.98 mean return).
 
 Scores: the mean dribbled distance in metres over 500 greedy episodes on fresh players (the dribbling envs), the
 mean return over 200 greedy episodes (Platform-v0, the toy env), the greedy success rate over 500 episodes (the
 navigation env). Each line prints the per-seed scores, their mean and their interquartile mean (IQM), the
-training episodes and env steps, and the training speed. Runs are single-threaded and seeded.
+training episodes and env steps, and the training speed. Runs are single-threaded and seeded. The IQM's 95 % CI is a
+percentile bootstrap over seeds (10,000 resamples). With ``--eval-every N`` the greedy score is also measured every
+``N`` env steps (on fewer episodes: 200 dribbling, 50 return, 200 navigation) and each line adds the training
+episodes at which every seed first reached the task's target (issue 8), ``-`` for a seed that did not.
 """
 
 from __future__ import annotations
@@ -28,6 +37,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 import torch as th  # noqa: E402
 from scipy import stats  # noqa: E402
+from stable_baselines3.common.callbacks import BaseCallback  # noqa: E402
 from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
 from stable_baselines3.common.evaluation import evaluate_policy  # noqa: E402
 from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
@@ -56,11 +66,14 @@ def dribble_env(profile: str) -> Callable[[int], VecEnv]:
     return make
 
 
-def dribble_score(profile: str) -> Callable[[SarsaAAC], float]:
-    def score(model: SarsaAAC) -> float:
+Score = Callable[[SarsaAAC, bool], float]  # (model, quick) -> greedy score; quick: fewer episodes
+
+
+def dribble_score(profile: str) -> Score:
+    def score(model: SarsaAAC, quick: bool) -> float:
         from robocup_dribble.evaluation import evaluate_dribbling
 
-        report = evaluate_dribbling(model, n_episodes=500, profile=profile, seed=10_000)
+        report = evaluate_dribbling(model, n_episodes=200 if quick else 500, profile=profile, seed=10_000)
         return float(np.mean(report.distances))
 
     return score
@@ -73,17 +86,18 @@ def platform_env(n_envs: int, seed: int) -> VecEnv:
     return make_vec_env(lambda: SelectObservation(gym.make("Platform-v0"), 0), n_envs=n_envs, seed=seed)
 
 
-def mean_return(make: Callable[[int, int], VecEnv], episodes: int) -> Callable[[SarsaAAC], float]:
-    def score(model: SarsaAAC) -> float:
-        return float(evaluate_policy(model, make(1, 10_000), n_eval_episodes=episodes, deterministic=True)[0])
+def mean_return(make: Callable[[int, int], VecEnv], episodes: int) -> Score:
+    def score(model: SarsaAAC, quick: bool) -> float:
+        n = 50 if quick else episodes
+        return float(evaluate_policy(model, make(1, 10_000), n_eval_episodes=n, deterministic=True)[0])
 
     return score
 
 
-def navigation_success(model: SarsaAAC) -> float:
+def navigation_success(model: SarsaAAC, quick: bool) -> float:
     env = make_vec_env(NavigationEnv, n_envs=50, seed=10_000)
     obs, successes, episodes = env.reset(), 0, 0
-    while episodes < 500:
+    while episodes < (200 if quick else 500):
         obs, _, dones, infos = env.step(model.predict(obs, deterministic=True)[0])
         for done, info in zip(dones, infos, strict=True):
             if done:
@@ -101,7 +115,7 @@ def toy(n_envs: int, seed: int) -> VecEnv:
 
 
 # name: (make env from seed, training steps, SarsaAAC keyword arguments, score)
-TASKS: dict[str, tuple[Callable[[int], VecEnv], int, dict[str, Any], Callable[[SarsaAAC], float]]] = {
+TASKS: dict[str, tuple[Callable[[int], VecEnv], int, dict[str, Any], Score]] = {
     "paper": (dribble_env("v11"), 150_000, {}, dribble_score("v11")),
     "v19": (dribble_env("v19"), 150_000, {}, dribble_score("v19")),
     "platform": (lambda seed: platform_env(16, seed), 100_000, {"info_keywords": ()}, mean_return(platform_env, 200)),
@@ -110,12 +124,54 @@ TASKS: dict[str, tuple[Callable[[int], VecEnv], int, dict[str, Any], Callable[[S
 }
 
 
+# The greedy score each task's target asks for (issue 8); the paper's MLP policies are asked for 16 m.
+TARGETS = {"paper": 25.0, "v19": 25.4, "platform": 0.98, "nav": 0.9, "toy": 9.0}
+MLP_PAPER_TARGET = 16.0
+
+
+def target(task: str, policy_name: str) -> float:
+    return MLP_PAPER_TARGET if task == "paper" and policy_name in ("mlp2", "rbfmlp2") else TARGETS[task]
+
+
 def iqm(values: list[float]) -> float:
     return float(stats.trim_mean(values, 0.25))
 
 
+def iqm_ci(values: list[float], resamples: int = 10_000) -> tuple[float, float]:
+    """95 % percentile-bootstrap interval of the IQM over seeds."""
+    rng = np.random.default_rng(0)
+    samples = np.asarray(values)[rng.integers(len(values), size=(resamples, len(values)))]
+    boot = stats.trim_mean(samples, 0.25, axis=1)
+    return float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))
+
+
+class TargetWatch(BaseCallback):
+    """Greedy score every ``every`` env steps; remembers the training episodes when it first reached ``target``."""
+
+    def __init__(self, score: Score, every: int, target: float):
+        super().__init__()
+        self.score, self.every, self.target = score, every, target
+        self.next_check, self.reached_at, self.curve = every, None, []
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self.next_check:
+            self.next_check += self.every
+            value = self.score(self.model, True)  # type: ignore[arg-type]
+            episodes = self.model._episode_num  # type: ignore[attr-defined]
+            self.curve.append((episodes, value))
+            if self.reached_at is None and value >= self.target:
+                self.reached_at = episodes
+        return True
+
+
 def run(
-    task: str, policy_name: str, seeds: list[int], steps: int | None, rate: float | None, settings: dict[str, Any]
+    task: str,
+    policy_name: str,
+    seeds: list[int],
+    steps: int | None,
+    rate: float | None,
+    settings: dict[str, Any],
+    eval_every: int | None = None,
 ) -> None:
     make_env, budget, kwargs, score = TASKS[task]
     if rate is not None:
@@ -123,21 +179,30 @@ def run(
     kwargs = {**kwargs, **settings}
     policy, policy_kwargs = POLICIES[policy_name]
     budget = steps or budget
-    scores, episodes, speeds = [], [], []
+    scores, episodes, speeds, reached = [], [], [], []
     for seed in seeds:
         model = SarsaAAC(policy, make_env(seed), seed=seed, policy_kwargs=policy_kwargs, **kwargs)
+        watch = TargetWatch(score, eval_every, target(task, policy_name)) if eval_every else None
         start = time.perf_counter()
-        model.learn(budget, log_interval=None)
+        model.learn(budget, callback=watch, log_interval=None)
+        # With a watch the time includes its evaluations: the speed is printed without one only.
         speeds.append(budget / (time.perf_counter() - start))
         episodes.append(model._episode_num)
-        scores.append(score(model))
+        scores.append(score(model, False))
+        if watch is not None:
+            reached.append(watch.reached_at)
     extra = "".join(f" {key}={value}" for key, value in settings.items())
-    print(
+    low, high = iqm_ci(scores)
+    line = (
         f"{task:9s} {policy_name:8s} rate={rate or 'default'}{extra} steps={budget:>7d} episodes~{int(np.mean(episodes)):>6d} "
         f"scores={[round(s, 3) for s in scores]} mean={np.mean(scores):.3f} iqm={iqm(scores):.3f} "
-        f"train={np.mean(speeds) / 1e3:.0f}k steps/s",
-        flush=True,
+        f"ci95=[{low:.3f}, {high:.3f}]"
     )
+    if eval_every:
+        line += f" episodes_to_{target(task, policy_name)}={['-' if e is None else e for e in reached]}"
+    else:
+        line += f" train={np.mean(speeds) / 1e3:.0f}k steps/s"
+    print(line, flush=True)
 
 
 DEFAULT_RUNS = (
@@ -151,6 +216,7 @@ def main() -> None:
     parser.add_argument("--only", default=DEFAULT_RUNS, help="comma-separated task-policy pairs")
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--steps", type=int, default=None, help="override every task's training steps")
+    parser.add_argument("--eval-every", type=int, default=None, help="env steps between greedy checks of the target")
     parser.add_argument("--rate", type=float, default=None, help="set the three learning rates (default: SarsaAAC's)")
     parser.add_argument(
         "--set", nargs="*", default=[], metavar="KEY=VALUE", help="SarsaAAC keyword arguments (Python literals)"
@@ -162,7 +228,7 @@ def main() -> None:
         task, policy_name = pair.split("-")
         if task not in TASKS or policy_name not in POLICIES:
             raise SystemExit(f"unknown pair {pair!r}: tasks {list(TASKS)}, policies {list(POLICIES)}")
-        run(task, policy_name, list(range(args.seeds)), args.steps, args.rate, settings)
+        run(task, policy_name, list(range(args.seeds)), args.steps, args.rate, settings, args.eval_every)
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium import spaces
+from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
@@ -127,6 +128,35 @@ def test_exploration_schedules():
         np.testing.assert_array_equal(a, b)
 
 
+class EpisodeRates(BaseCallback):
+    """Records (episodes, exploration rate, parameter noise) after every step."""
+
+    def __init__(self):
+        super().__init__()
+        self.rates = []
+
+    def _on_step(self):
+        self.rates.append((self.model._episode_num, self.model.exploration_rate, self.model.param_noise))
+        return True
+
+
+@pytest.mark.parametrize("budget", [300, 3000])
+def test_exploration_by_episodes_ignores_the_budget(budget):
+    """With exploration_episodes=10 (one-step episodes) both rates reach their final values after 10 episodes,
+    halfway at 5, whatever total_timesteps."""
+    env = OneStepEnv(truncate=False)
+    model = SarsaAAC(
+        "TilePolicy", env, exploration_episodes=10, exploration_initial_eps=0.8, exploration_final_eps=0.2, seed=0
+    )
+    callback = EpisodeRates()
+    model.learn(budget, callback=callback)
+    rates = {episodes: (rate, noise) for episodes, rate, noise in callback.rates}
+    assert rates[0] == pytest.approx((0.8, 0.3))
+    assert rates[5] == pytest.approx((0.5, 0.175))  # (0.8 + 0.2) / 2, (0.3 + 0.05) / 2
+    assert rates[10] == pytest.approx((0.2, 0.05))
+    assert (model.exploration_rate, model.param_noise) == pytest.approx((0.2, 0.05))
+
+
 def test_predict_explores_when_not_deterministic():
     model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), exploration_initial_eps=1.0, seed=0)
     obs = np.array([0.3, -0.2], np.float32)
@@ -144,6 +174,8 @@ def test_predict_explores_when_not_deterministic():
         (dict(exploration_fraction=0.0), "exploration_fraction must be in"),
         (dict(param_noise_initial=-0.1), "param_noise_initial must be a finite number >= 0"),
         (dict(exploration_initial_eps=2.0), "epsilon-greedy exploration rates must be <= 1"),
+        (dict(exploration_episodes=0), "exploration_episodes must be None or a whole number of episodes >= 1"),
+        (dict(exploration_episodes=2.5), "exploration_episodes must be None or a whole number"),
     ],
 )
 def test_bad_hyperparameters(kwargs, message):

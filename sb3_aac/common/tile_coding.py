@@ -258,3 +258,131 @@ class TileKernel(TileForward):
         g = err * lr
         _add_rows(self.w, active, g * (w / weight_batch))
         self.b += g.sum(0) * (w / max(1.0, n))
+
+    def update_traced(self, cache: TileCache, err: np.ndarray, lr: np.ndarray, hit: np.ndarray, traces: TileTraces) -> None:
+        """
+        :meth:`update` with eligibility traces on ``traces.columns``: their step, the same normalised step on
+        ``err * lr``, goes to every feature (and the bias) in proportion to its trace after folding in this step's
+        features with ``hit`` ``(n, T)`` (see :class:`TileTraces`); the other columns take :meth:`update`'s step.
+        With ``decay == 0`` and replacing traces this is :meth:`update` exactly.
+        """
+        n = len(err)
+        active = cache.x[:n]
+        c = active.shape[1]
+        w = 1.0 / (1.0 + c)
+        weight_batch = max(1.0, _largest_overlap(active, self._counts) / c)
+        g = err * lr
+        columns = traces.columns
+        _trace_step(
+            self.w,
+            active,
+            g * (w / weight_batch),
+            columns,
+            hit,
+            traces.decay,
+            traces.replacing,
+            traces.tolerance,
+            traces.trace,
+            traces.listed,
+            traces.live,
+            traces.n_live,
+        )
+        bias_trace = traces.bias_trace[:n]
+        bias_trace *= traces.decay
+        if traces.replacing:
+            bias_trace[:] = hit
+        else:
+            bias_trace += hit
+        g_other = g.copy()
+        g_other[:, columns] = 0.0
+        _add_rows(self.w, active, g_other * (w / weight_batch))
+        g_other[:, columns] = g[:, columns] * bias_trace
+        self.b += g_other.sum(0) * (w / max(1.0, n))
+
+
+@numba.njit(cache=True, nogil=True)
+def _trace_step(w, active, steps, columns, hit, decay, replacing, tolerance, trace, listed, live, n_live):  # type: ignore[no-untyped-def]
+    """
+    Per lane ``i``: decay its traces by ``decay`` (dropping features whose traces all fell below ``tolerance``),
+    set (``replacing``) or add ``hit[i]`` on its active features, then ``w[f, columns] += steps[i, columns] *
+    trace[i, f]`` for every feature ``f`` with a trace.
+    """
+    n, c_count = active.shape
+    t_count = len(columns)
+    for i in range(n):
+        kept = 0
+        for s in range(n_live[i]):
+            f = live[i, s]
+            alive = False
+            for j in range(t_count):
+                trace[i, f, j] *= decay
+                alive |= abs(trace[i, f, j]) >= tolerance
+            if alive:
+                live[i, kept] = f
+                kept += 1
+            else:
+                listed[i, f] = False
+                for j in range(t_count):
+                    trace[i, f, j] = 0.0
+        for c in range(c_count):
+            f = active[i, c]
+            if not listed[i, f]:
+                listed[i, f] = True
+                live[i, kept] = f
+                kept += 1
+            for j in range(t_count):
+                trace[i, f, j] = hit[i, j] if replacing else trace[i, f, j] + hit[i, j]
+        n_live[i] = kept
+        for s in range(kept):
+            f = live[i, s]
+            for j in range(t_count):
+                w[f, columns[j]] += steps[i, columns[j]] * trace[i, f, j]
+
+
+@numba.njit(cache=True, nogil=True)
+def _clear_lanes(lanes, trace, listed, live, n_live):  # type: ignore[no-untyped-def]
+    """Zero the traces of ``lanes``."""
+    for i in lanes:
+        for s in range(n_live[i]):
+            f = live[i, s]
+            listed[i, f] = False
+            trace[i, f, :] = 0.0
+        n_live[i] = 0
+
+
+class TileTraces:
+    """
+    Eligibility traces (Sutton & Barto, 2nd ed., Sec. 12.2 and 12.7) of some output columns of a :class:`TileBank`,
+    one trace per lane, for :meth:`TileKernel.update_traced`.
+
+    At each step, lane ``i``'s traces decay by ``decay`` (``gamma * lambda``), then on the features active in its
+    current observation (and on the bias, always active) column ``j``'s trace is set to ``hit[i, j]``
+    (replacing traces; ``hit`` is 0 or 1, so a 0 clears another action's trace there, as Singh & Sutton 1996
+    recommend) or has ``hit[i, j]`` added (accumulating traces). A feature whose traces all fall below
+    ``tolerance`` is dropped (set to 0), so each step costs ``O(features with a trace)``: at most about
+    ``C * log(tolerance) / log(decay)``.
+
+    :param n_lanes: Number of lanes (environments)
+    :param n_features: The bank's number of tile features
+    :param columns: ``(T,)`` output columns that learn with traces
+    :param decay: ``gamma * lambda``, in ``[0, 1]``
+    :param replacing: Replacing (True) or accumulating (False) traces
+    :param tolerance: Traces below this are dropped
+    """
+
+    def __init__(
+        self, n_lanes: int, n_features: int, columns: np.ndarray, decay: float, replacing: bool, tolerance: float = 1e-3
+    ):
+        self.columns = np.asarray(columns, dtype=np.int64)
+        self.decay, self.replacing, self.tolerance = float(decay), bool(replacing), float(tolerance)
+        t_count = len(self.columns)
+        self.trace = np.zeros((n_lanes, n_features, t_count))
+        self.bias_trace = np.zeros((n_lanes, t_count))
+        self.listed = np.zeros((n_lanes, n_features), dtype=np.bool_)
+        self.live = np.zeros((n_lanes, n_features), dtype=np.int64)
+        self.n_live = np.zeros(n_lanes, dtype=np.int64)
+
+    def clear(self, lanes: np.ndarray) -> None:
+        """Zero the traces of ``lanes`` (e.g. where an episode ended)."""
+        _clear_lanes(np.asarray(lanes, dtype=np.int64), self.trace, self.listed, self.live, self.n_live)
+        self.bias_trace[lanes] = 0.0
