@@ -393,3 +393,17 @@ def test_the_quick_preset_runs_and_reports(tmp_path):
     text = (out / "report.md").read_text()
     assert "SarsaAAC tiles (recommended)" in text and "PPO" in text and "hand-coded" in text
     assert (out / "fig_best.png").stat().st_size > 10_000
+
+
+def test_a_claim_is_not_refuted_by_runs_that_stopped_before_it():
+    from benchmarks.groups import Group
+    from benchmarks.report_text import _reach_claim
+
+    runs = [synthetic_cell(ENV_ID, "SarsaAAC", "mlp2", s, 12.0, "MLP") for s in range(5)]
+    for r in runs:
+        r["curve"] = [p for p in r["curve"] if p["episodes"] <= 8_000]  # stopped at 8,000 episodes
+    group = Group(ENV_ID, "SarsaAAC", "mlp2", 168_000, runs)
+    assert _reach_claim(group, 16.0, None, after=40_000)[1] == "not tested (runs ended before 40,000 episodes)"
+    assert _reach_claim(group, 16.0, 15_000)[1] == "not tested (runs ended before 15,000 episodes)"
+    assert _reach_claim(group, 16.0, None)[1] == "not met"  # a claim about the end of these runs is refuted
+    assert _reach_claim(group, 1.0, 15_000)[1] == "met"  # reached before stopping: met whatever came later
