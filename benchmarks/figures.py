@@ -162,7 +162,7 @@ def best_figure(out: Path, groups: dict[str, list[Group]], references: dict[str,
         for col, (x, xlabel) in enumerate(axes_x):
             ax = axes[row, col]
             for g in chosen:
-                label = f"SarsaAAC {g.label}" if g.algo == "SarsaAAC" and g.family != "Tiles" else g.label
+                label = f"SarsaAAC {g.label}" if g.algo == "SarsaAAC" else g.label
                 _plot_group(ax, g, x, label)
             _references(ax, env_id, references.get(env_id))
             _axes_style(ax, env_id, xlabel, _ymax(references, [env_id], chosen))

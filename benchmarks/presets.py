@@ -61,7 +61,7 @@ SARSA_CONFIGS: dict[str, tuple[str, str, dict[str, Any]]] = {
 FAMILIES = ("Tiles", "MLP", "MLP+RBF", "RBF")  # SarsaAAC's
 PAPER_FAMILIES = ("MLP", "MLP+RBF", "RBF")
 CONFIG_LABELS = {
-    "tile": "SarsaAAC tiles (recommended)",
+    "tile": "TilePolicy (recommended)",
     "mlp2": "MLP (2 hidden)",
     "mlp10": "MLP (10 hidden)",
     "mlp20": "MLP (20 hidden)",

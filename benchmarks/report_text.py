@@ -363,7 +363,7 @@ def headline_verdicts(groups: dict[str, list[Group]], references: dict[str, Any]
         unit, digits = (" m", 1) if domains.is_dribbling(env_id) else ("", 3)
         a = f"SarsaAAC {sarsa.config}"
         lines.append(
-            f"- **{env_id}**: best SarsaAAC config {sarsa.label}: {fmt_ci(sarsa.final(), digits)}{unit} "
+            f"- **{env_id}**: best SarsaAAC config, {sarsa.label}: {fmt_ci(sarsa.final(), digits)}{unit} "
             f"({len(sarsa.runs)} seeds)."
         )
         for kind in ("parameterized peer", "SB3 baseline"):

@@ -391,7 +391,7 @@ def test_the_quick_preset_runs_and_reports(tmp_path):
     assert len(cells) == len(build_cells("quick"))
     assert bench_report.main([str(out)]) == 0
     text = (out / "report.md").read_text()
-    assert "SarsaAAC tiles (recommended)" in text and "PPO" in text and "hand-coded" in text
+    assert "TilePolicy (recommended)" in text and "PPO" in text and "hand-coded" in text
     assert (out / "fig_best.png").stat().st_size > 10_000
 
 
