@@ -249,15 +249,20 @@ class TileKernel(TileForward):
         One batch-normalised step on ``0.5 * err**2`` (module docstring), in place. ``hidden_gain`` is accepted for
         the dense banks' interface and unused (there is no hidden layer).
         """
+        active, g, weight_scale, bias_scale = self._step_scales(cache, err, lr)
+        _add_rows(self.w, active, g * weight_scale)
+        self.b += g.sum(0) * bias_scale
+
+    def _step_scales(self, cache: TileCache, err: np.ndarray, lr: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """The batch's active features, ``err * lr``, and the factors that make it the normalised step of the
+        weights and of the bias (module docstring)."""
         n = len(err)
         active = cache.x[:n]
         c = active.shape[1]
         w = 1.0 / (1.0 + c)
         # alpha = w * c: G_w / alpha = max_i overlap_i / c; sum_j w / (1 - alpha) = n.
         weight_batch = max(1.0, _largest_overlap(active, self._counts) / c)
-        g = err * lr
-        _add_rows(self.w, active, g * (w / weight_batch))
-        self.b += g.sum(0) * (w / max(1.0, n))
+        return active, err * lr, w / weight_batch, w / max(1.0, n)
 
     def update_traced(self, cache: TileCache, err: np.ndarray, lr: np.ndarray, hit: np.ndarray, traces: TileTraces) -> None:
         """
@@ -266,17 +271,13 @@ class TileKernel(TileForward):
         features with ``hit`` ``(n, T)`` (see :class:`TileTraces`); the other columns take :meth:`update`'s step.
         With ``decay == 0`` and replacing traces this is :meth:`update` exactly.
         """
+        active, g, weight_scale, bias_scale = self._step_scales(cache, err, lr)
         n = len(err)
-        active = cache.x[:n]
-        c = active.shape[1]
-        w = 1.0 / (1.0 + c)
-        weight_batch = max(1.0, _largest_overlap(active, self._counts) / c)
-        g = err * lr
         columns = traces.columns
         _trace_step(
             self.w,
             active,
-            g * (w / weight_batch),
+            g * weight_scale,
             columns,
             hit,
             traces.decay,
@@ -295,9 +296,9 @@ class TileKernel(TileForward):
             bias_trace += hit
         g_other = g.copy()
         g_other[:, columns] = 0.0
-        _add_rows(self.w, active, g_other * (w / weight_batch))
+        _add_rows(self.w, active, g_other * weight_scale)
         g_other[:, columns] = g[:, columns] * bias_trace
-        self.b += g_other.sum(0) * (w / max(1.0, n))
+        self.b += g_other.sum(0) * bias_scale
 
 
 @numba.njit(cache=True, nogil=True)
