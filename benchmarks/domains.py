@@ -86,7 +86,8 @@ def summarize(env_id: str, scores: np.ndarray, ball_lost: np.ndarray | None = No
     d = np.asarray(scores, dtype=float)
     episode_scores = [round(float(x), 4) for x in d]
     if is_dribbling(env_id):
-        assert ball_lost is not None
+        if ball_lost is None:
+            raise ValueError(f"a dribbling summary needs the per-episode ball_lost flags ({env_id})")
         return {
             "episodes": len(d),
             **distance_stats(d),

@@ -19,9 +19,9 @@ PREDICT_CALLS = 300  # single-observation predict calls timed per cell (the medi
 def evaluation_observations(env_id: str, count: int) -> list[np.ndarray]:
     """``count`` first observations of the final evaluation set's episodes."""
     if domains.is_dribbling(env_id):
-        from robocup_dribble import DribbleVecEnv
+        from robocup_dribble import ENV_PROFILES, DribbleVecEnv
 
-        env = DribbleVecEnv(count, profile=domains.ENV_PROFILES[env_id])
+        env = DribbleVecEnv(count, profile=ENV_PROFILES[env_id])
         env.seed(FINAL_SEED)
         return list(env.reset())
     platform = domains.platform_env()

@@ -76,3 +76,5 @@ def test_bad_domain_input_is_named():
         domains.platform_returns(None, 0, seed=1)
     with pytest.raises(ValueError, match="unknown env id 'Nope-v0'"):
         domains.train_env("Nope-v0", 1, 0)
+    with pytest.raises(ValueError, match="ball_lost"):
+        domains.summarize("RoboCupDribble-v0", np.array([1.0]))
