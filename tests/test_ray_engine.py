@@ -71,8 +71,10 @@ def test_a_node_killed_mid_grid_loses_no_cell(cluster, tmp_path):
     """When the first cell has come back and both nodes are running the next ones (4 cells, 2 CPUs), the worker node
     is killed. Its cell runs again on the head node, and every cell of the grid ends with its files."""
     (worker,) = cluster.worker_nodes
-    # cells of a few seconds: far longer than the kill takes, so the worker is still inside its cell when it dies
-    cells = tiny_cells(4, budget=20_000)
+    # a short first cell, then long ones: when the short one comes back, the other node's cell and the next one have
+    # seconds left, far longer than the kill takes, so the worker is inside its cell when it dies
+    short, *long = tiny_cells(4, budget=40_000)
+    cells = [Cell.from_dict({**short.to_dict(), "budget": 1_000}), *long]
     scratch = tmp_path / "scratch"
     scratch.mkdir()
     engine = RayEngine(max_retries=3, scratch_root=str(scratch))
