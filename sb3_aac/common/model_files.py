@@ -23,6 +23,17 @@ REQUIRED_DATA_KEYS = ("policy_class", "observation_space", "action_space", "num_
 MAX_UNPACKED_BYTES = 1 << 31  # a model of this library is kilobytes to megabytes; refuse zip bombs
 
 
+def check_policy_class(algorithm: Any, base: type) -> None:
+    """Raise a :class:`ValueError` unless ``algorithm.policy_class`` is ``base`` or a subclass of it (a model loaded
+    from another algorithm's file brings its own policy class)."""
+    policy_class = algorithm.policy_class
+    if not (isinstance(policy_class, type) and issubclass(policy_class, base)):
+        raise ValueError(
+            f"{type(algorithm).__name__} needs a {base.__name__} ({', '.join(algorithm.policy_aliases)} or a subclass), "
+            f"got {policy_class} (loading a model saved by another algorithm?)"
+        )
+
+
 def model_zip_path(path: str | os.PathLike[str]) -> Path:
     """The file SB3's ``load`` opens for ``path``: the path itself, or with ``.zip`` appended when that exists."""
     path = Path(path)

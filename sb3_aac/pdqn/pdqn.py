@@ -26,6 +26,7 @@ from torch.nn import functional as F
 
 from sb3_aac.common.array_env import array_path
 from sb3_aac.common.buffers import ParameterizedReplayBuffer
+from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.pdqn.noise import ParamNoise
 from sb3_aac.pdqn.policies import MlpPolicy, PDQNPolicy
 
@@ -171,11 +172,7 @@ class PDQN(OffPolicyAlgorithm):
             # The action space is validated (with a ValueError) when the policy parses it.
             supported_action_spaces=None,
         )
-        if not (isinstance(self.policy_class, type) and issubclass(self.policy_class, PDQNPolicy)):  # type: ignore[redundant-expr]
-            raise ValueError(
-                f"{type(self).__name__} needs a PDQNPolicy (MlpPolicy or a subclass), got {self.policy_class} "
-                "(loading a model saved by another algorithm?)"
-            )
+        check_policy_class(self, PDQNPolicy)
         self.actor_learning_rate = actor_learning_rate
         self.actor_tau = actor_tau
         self.target_update_interval = target_update_interval

@@ -17,7 +17,7 @@ from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedul
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
 from sb3_aac.common.array_env import array_path
-from sb3_aac.common.model_files import check_model_file
+from sb3_aac.common.model_files import check_model_file, check_policy_class
 from sb3_aac.common.tile_coding import TileBank, TileKernel, TileTraces
 from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
@@ -226,12 +226,7 @@ class SarsaAAC(BaseAlgorithm):
             # The action space is validated (with a ValueError) when the policy parses it.
             supported_action_spaces=None,
         )
-        # A run-time check: a model loaded from another algorithm's file brings its own policy class.
-        if not (isinstance(self.policy_class, type) and issubclass(self.policy_class, SarsaAACPolicy)):  # type: ignore[redundant-expr]
-            raise ValueError(
-                f"SarsaAAC needs a SarsaAACPolicy ({', '.join(self.policy_aliases)} or a subclass), got {self.policy_class} "
-                "(loading a model saved by another algorithm?)"
-            )
+        check_policy_class(self, SarsaAACPolicy)
         self.q_learning_rate = q_learning_rate
         self.param_learning_rate = param_learning_rate
         self.gamma = gamma
