@@ -38,6 +38,16 @@ positive_float = _checked(float, "a number", lambda v: v > 0 and math.isfinite(v
 nonnegative_int = _checked(int, "a whole number", lambda v: v >= 0, ">= 0")
 
 
+def add_trust_argument(parser: argparse.ArgumentParser) -> None:
+    """``--trust``: load a model.zip with its pickled entries (which runs code from the file), as SB3's ``load`` does."""
+    parser.add_argument(
+        "--trust",
+        action="store_true",
+        help="load a model.zip whose pickled entries this command cannot stand in for (runs code from the file: only "
+        "for files you or someone you trust made; by default nothing of a model.zip is unpickled)",
+    )
+
+
 def key_value(text: str) -> tuple[str, Any]:
     key, sep, raw = text.partition("=")
     if not sep or not key.strip():

@@ -42,7 +42,7 @@ def add_evaluate_commands(add: Any, played: argparse.ArgumentParser) -> None:
 def cmd_evaluate(args: argparse.Namespace) -> None:
     from robocup_dribble.evaluation import evaluate_dribbling
 
-    policy, profile = load_policy(args.model, args.profile)
+    policy, profile = load_policy(args.model, args.profile, args.trust)
     start = time.perf_counter()
     report = evaluate_dribbling(policy, args.episodes, profile=profile, seed=args.seed)
     print_dribble_report(
@@ -56,7 +56,7 @@ def cmd_reliability(args: argparse.Namespace) -> None:
     from robocup_dribble.evaluation import reliability_test
 
     out = output_file(args.out, (".png",), "--out")
-    policy, profile = load_policy(args.model, args.profile)
+    policy, profile = load_policy(args.model, args.profile, args.trust)
     report = reliability_test(policy, args.players, profile=profile, seed=args.seed)
     print(f"reliability test of {args.model} on {PROFILE_ENV_IDS[profile]}: {args.players} fresh players, one episode each")
     print(f"  {report.summary()}")

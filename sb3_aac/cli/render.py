@@ -37,7 +37,7 @@ def cmd_render(args: argparse.Namespace) -> None:
             import imageio_ffmpeg  # noqa: F401
         except ImportError:
             raise CliError("writing .mp4 needs imageio-ffmpeg (pip install imageio-ffmpeg); or write a .gif") from None
-    policy, profile = load_policy(args.model, args.profile)
+    policy, profile = load_policy(args.model, args.profile, args.trust)
     try:
         env = DribbleEnv(profile=profile, render_mode="human" if args.window else "rgb_array")
         obs, info = env.reset(seed=args.seed)
