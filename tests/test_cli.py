@@ -242,3 +242,20 @@ def test_train_out_replaces_the_set_and_keeps_other_files(trained: Path, tmp_pat
     assert json.loads((out / "run.json").read_text())["seed"] == 7
     assert (out / "reliability.png").read_bytes() == b"png"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"] and not list(out.glob(".*"))
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["train", "--n-envs", "100000000000"], "--n-envs: must be in 1 .. 65,536"),
+        (["train", "--seed", str(2**70)], "--seed: must be in 0 .. 4294967295"),
+        (["train", "--timesteps", "1" + "0" * 13], "--timesteps: must be in 1 .. 1e+11"),
+        (["train", "--episodes", "0"], "--episodes: must be in 1 .. 10,000,000"),
+        (["evaluate", "dribbler", "--episodes", str(10**20)], "--episodes: must be in 1 .. 10,000,000"),
+        (["evaluate", "dribbler", "--seed", "-1"], "--seed: must be in 0 .. 4294967295"),
+        (["render", "dribbler", "--fps", "1e-300"], "--fps: must be in 0.1 .. 1000 frames per second"),
+        (["tune", "--n-envs", "1e11"], "--n-envs: expected a whole number, got '1e11'"),
+    ],
+)
+def test_sizes_and_numbers_beyond_their_limits_are_one_line(capsys, argv, message) -> None:
+    assert message in run_error(capsys, argv)

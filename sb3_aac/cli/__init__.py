@@ -16,7 +16,7 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-from sb3_aac.cli.arguments import CliError, add_trust_argument, nonnegative_int
+from sb3_aac.cli.arguments import CliError, add_trust_argument, seed_int
 from sb3_aac.cli.bench import add_bench_command
 from sb3_aac.cli.envs import PROFILE_ENV_IDS, register_toy_env
 from sb3_aac.cli.evaluate import add_evaluate_commands
@@ -75,7 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--profile", choices=list(PROFILE_ENV_IDS), help="server profile (default: inferred from MODEL's spaces)"
     )
     played.add_argument(
-        "--seed", type=nonnegative_int, default=0, help="seed of the players, starts and noise (default: %(default)s)"
+        "--seed", type=seed_int, default=0, help="seed of the players, starts and noise (default: %(default)s)"
     )
     add_trust_argument(played)
 

@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from sb3_aac.cli.arguments import output_file, positive_int, written
+from sb3_aac.cli.arguments import episode_count, output_file, written
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
 from sb3_aac.cli.models import load_policy
 from sb3_aac.cli.reports import print_dribble_report, reliability_figure
@@ -23,7 +23,7 @@ def add_evaluate_commands(add: Any, played: argparse.ArgumentParser) -> None:
         "sb3-aac evaluate runs/rbf/model.zip --episodes 1000   |   sb3-aac evaluate dribbler --profile v11",
         (played,),
     )
-    evaluate.add_argument("--episodes", type=positive_int, default=1000, help="episodes (default: %(default)s)")
+    evaluate.add_argument("--episodes", type=episode_count, default=1000, help="episodes (default: %(default)s)")
     evaluate.set_defaults(func=cmd_evaluate)
 
     reliability = add(
@@ -33,7 +33,7 @@ def add_evaluate_commands(add: Any, played: argparse.ArgumentParser) -> None:
         (played,),
     )
     reliability.add_argument(
-        "--players", type=positive_int, default=10_000, help="players (default: %(default)s, as the paper)"
+        "--players", type=episode_count, default=10_000, help="players (default: %(default)s, as the paper)"
     )
     reliability.add_argument("--out", default="reliability.png", help="PNG to write (default: %(default)s)")
     reliability.set_defaults(func=cmd_reliability)

@@ -9,7 +9,16 @@ import json
 import time
 from typing import Any
 
-from sb3_aac.cli.arguments import CliError, key_value, nonnegative_int, output_dir, positive_int
+from sb3_aac.cli.arguments import (
+    CliError,
+    episode_count,
+    episode_count_or_zero,
+    key_value,
+    lane_count,
+    output_dir,
+    seed_int,
+    step_count,
+)
 from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env, max_episode_length
 from sb3_aac.cli.models import ALGOS, POLICIES, algorithm, hyperparameters
 from sb3_aac.cli.reports import print_dribble_report
@@ -33,15 +42,15 @@ def add_train_command(add: Any) -> None:
     )
     budget = train.add_mutually_exclusive_group()
     budget.add_argument(
-        "--timesteps", type=positive_int, default=DEFAULT_TIMESTEPS, help="training budget in env steps (default: %(default)s)"
+        "--timesteps", type=step_count, default=DEFAULT_TIMESTEPS, help="training budget in env steps (default: %(default)s)"
     )
     budget.add_argument(
         "--episodes",
-        type=positive_int,
+        type=episode_count,
         help="training budget in episodes (schedules span episodes x max episode length steps)",
     )
-    train.add_argument("--n-envs", type=positive_int, default=16, help="envs stepped side by side (default: %(default)s)")
-    train.add_argument("--seed", type=nonnegative_int, default=0, help="random seed (default: %(default)s)")
+    train.add_argument("--n-envs", type=lane_count, default=16, help="envs stepped side by side (default: %(default)s)")
+    train.add_argument("--seed", type=seed_int, default=0, help="random seed (default: %(default)s)")
     train.add_argument("--tensorboard", metavar="DIR", help="write TensorBoard logs here (view: tensorboard --logdir DIR)")
     train.add_argument("--progress-bar", action="store_true", help="show a progress bar (tqdm, rich)")
     train.add_argument("--out", metavar="DIR", help="save DIR/model.zip, DIR/policy.aacp (exported) and DIR/run.json")
@@ -56,7 +65,7 @@ def add_train_command(add: Any) -> None:
         "actor_net_arch, param_bounding, initial_params) go into policy_kwargs",
     )
     train.add_argument(
-        "--eval-episodes", type=nonnegative_int, default=1000, help="greedy evaluation episodes after training (0: none)"
+        "--eval-episodes", type=episode_count_or_zero, default=1000, help="greedy evaluation episodes after training (0: none)"
     )
     train.add_argument(
         "--gym-package", action="append", default=[], metavar="MODULE", help="import MODULE first (registers envs)"
