@@ -2,7 +2,7 @@
 
 Uc-Cetina (2013) names the action types (Dash Max, Kick Velocity, Kick Position, Kick Align) and says they take
 7 parameters in all, at most 2 each; the parameter meanings were lost with the paper's figures. Ours (chosen by us,
-documented here and in the README):
+documented here and in docs/robocup_dribble.md):
 
 ====================  =========================  ===================================================================
 action type           parameters (units, range)  server command this cycle
