@@ -1,4 +1,4 @@
-"""Engines that run a grid's cells somewhere else than the driver's own process pool: Ray (issue 13 item 7).
+"""Engines that run a grid's cells somewhere else than the driver's own process pool: Ray.
 
 :func:`benchmarks.execution.run_grid` hands the cells still to run to an engine (``engine.run(cells, out, record)``);
 without one it uses its local process pool (the default for one machine). An engine calls ``record(cell_id,

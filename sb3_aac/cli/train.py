@@ -38,7 +38,7 @@ def add_train_command(add: Any) -> None:
     train.add_argument("--env", default="RoboCupDribblePaper-v0", help="registered env id (default: %(default)s)")
     train.add_argument("--algo", default="sarsa_aac", choices=list(ALGOS), help="algorithm (default: %(default)s)")
     train.add_argument(
-        "--policy", choices=POLICIES, help="function approximators (default: RbfPolicy; MlpPolicy for pdqn/mpdqn)"
+        "--policy", choices=POLICIES, help="function approximators (default: TilePolicy; MlpPolicy for pdqn/mpdqn)"
     )
     budget = train.add_mutually_exclusive_group()
     budget.add_argument(
