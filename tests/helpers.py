@@ -24,7 +24,8 @@ class Algo:
     policy: str  # a key of its policy_aliases
     cli: str  # its name for ``sb3-aac train --algo`` and rl-zoo3
     kwargs: dict[str, Any] = field(default_factory=dict)  # small, fast settings for tests
-    train_tags: tuple[str, ...] = ()  # its own ``train/`` log keys, besides ``train/critic_loss``
+    own_tags: tuple[str, ...] = ()  # the log keys of its own (besides tests/test_logging.py's COMMON_TAGS)
+    log_often: dict[str, Any] = field(default_factory=dict)  # settings under which log_interval alone sets the dumps
 
     @property
     def id(self) -> str:
@@ -35,13 +36,15 @@ class Algo:
         return self.algo(self.policy, env, **{**self.kwargs, **kwargs})
 
 
-_SARSA_AAC_TAGS = ("train/td_error_abs_mean", "train/q_loss", "train/param_update_fraction", "train/param_noise")
+_SARSA_AAC_TAGS = (
+    *("rollout/type_freq_1", "train/td_error_abs_mean", "train/q_loss", "train/param_update_fraction", "train/param_noise"),
+)
 _PDQN_TAGS = ("train/actor_loss", "train/learning_rate", "train/actor_learning_rate")
 # Every algorithm, and SarsaAAC with each policy: a new algorithm (or policy) joins the feature tests by one line.
 ALGOS = [
     # RbfPolicy first: the SarsaAAC case of ALGO_CLASSES.
     *(
-        Algo(SarsaAAC, name, "sarsa_aac", train_tags=_SARSA_AAC_TAGS)
+        Algo(SarsaAAC, name, "sarsa_aac", own_tags=_SARSA_AAC_TAGS, log_often=dict(log_min_timesteps=0))
         for name in ("RbfPolicy", "MlpPolicy", "RbfMlpPolicy", "TilePolicy")
     ),
     Algo(PDQN, "MlpPolicy", "pdqn", PDQN_SMALL, _PDQN_TAGS),

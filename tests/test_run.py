@@ -10,7 +10,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from tests.helpers import ALGO_CLASSES, LAYOUTS, OneStepEnv, algos
+from tests.helpers import ALGO_CLASSES, ALGOS, LAYOUTS, OneStepEnv, algos
 
 
 @algos()
@@ -108,3 +108,13 @@ def test_non_finite_reward_raises(case):
         FloatingPointError, match=rf"{case.algo.__name__} diverged: .* check that the env returns finite rewards"
     ):
         model.learn(300)
+
+
+def test_every_algorithm_is_in_the_registry():
+    """Each algorithm sb3_aac exports runs the feature tests: it has a case in tests.helpers.ALGOS."""
+    import sb3_aac
+    from stable_baselines3.common.base_class import BaseAlgorithm
+
+    exported = {getattr(sb3_aac, name) for name in sb3_aac.__all__}
+    algorithms = {obj for obj in exported if isinstance(obj, type) and issubclass(obj, BaseAlgorithm)}
+    assert algorithms == {case.algo for case in ALGOS}
