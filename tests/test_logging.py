@@ -136,3 +136,33 @@ def test_stop_training_on_max_episodes(case):
     model = case.make(ParameterizedTargetEnv(max_episode_steps=5, loss_threshold=0.0), seed=0)
     model.learn(10_000, callback=StopTrainingOnMaxEpisodes(max_episodes=3))
     assert model.num_timesteps == 15  # stopped at the step that ended the third episode
+
+
+class InfoValueLogger(BaseCallback):
+    """The SB3 docs' "log an info value" callback, and the locals every algorithm shows on the array path."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.distances: list[float] = []
+
+    def _on_step(self) -> bool:
+        infos, dones = self.locals["infos"], self.locals["dones"]
+        n = self.training_env.num_envs
+        assert isinstance(infos, list) and len(infos) == n and all(isinstance(info, dict) for info in infos)
+        types, params = self.locals["actions"]  # the array path's (types, scaled parameters)
+        assert types.shape == (n,) and params.shape == (n, 7) and np.all(np.abs(params) <= 1)
+        for info, done in zip(infos, dones, strict=True):
+            assert ("terminal_observation" in info) == done
+            if "distance" in info:
+                self.distances.append(info["distance"])
+                self.logger.record_mean("custom/distance", info["distance"])
+        return True
+
+
+@algos(ALGO_CLASSES)
+def test_callback_locals_on_the_array_path(case):
+    from robocup_dribble import DribbleVecEnv
+
+    callback = InfoValueLogger()
+    case.make(DribbleVecEnv(3, profile="v11"), seed=0).learn(300, callback=callback)
+    assert callback.distances and np.isfinite(callback.distances).all()

@@ -22,7 +22,7 @@ from stable_baselines3.common.utils import (
 from stable_baselines3.common.vec_env import VecEnv
 from torch.nn import functional as F
 
-from sb3_aac.common.array_env import array_path
+from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.model_files import check_policy_class
@@ -346,18 +346,16 @@ class PDQN(EpisodeStatsMixin, OffPolicyAlgorithm):
         callback.on_rollout_start()
         while should_collect_more_steps(train_freq, n_steps, n_episodes):
             k, params = self._sample_action(learning_starts, None, env.num_envs)
-            infos: list[dict[str, Any]] | None = None
-            actions = None  # the env actions (an object array of tuples) on the SB3 path, for callbacks
+            # Callbacks see the same locals on both paths (sb3_aac.common.array_env).
+            actions: Any
+            infos: list[dict[str, Any]]
             if arrays is not None:
-                step = arrays.step_arrays(k, spec.unscale(params))
-                new_obs, rewards, truncated = step.observations, step.rewards, step.truncated
-                dones = step.terminated | truncated
+                actions = (k, params)
+                new_obs, rewards, dones, infos = step_as_vec_env(arrays, k, spec.unscale(params))
             else:
                 actions = spec.to_env(k, params)
                 new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
-                truncated = np.array(
-                    [bool(d and i.get("TimeLimit.truncated", False)) for d, i in zip(dones, infos, strict=True)]
-                )
+            truncated = np.array([bool(d and i.get("TimeLimit.truncated", False)) for d, i in zip(dones, infos, strict=True)])
             self.num_timesteps += env.num_envs
             n_steps += 1
 
@@ -368,33 +366,26 @@ class PDQN(EpisodeStatsMixin, OffPolicyAlgorithm):
             next_obs = np.array(new_obs)  # an owned copy (a VecEnv may reuse its buffers)
             ended = np.flatnonzero(dones)
             for i in ended:
-                next_obs[i] = step.terminal_observations[i] if infos is None else infos[i]["terminal_observation"]
+                next_obs[i] = infos[i]["terminal_observation"]
             replay_buffer.add(self._last_obs, next_obs, k, params, rewards, dones, truncated)  # type: ignore[arg-type]
             self._last_obs = np.array(new_obs)
             self._update_current_progress_remaining(self.num_timesteps, self._total_timesteps)
             self._on_step()
             if len(ended):
                 n_episodes += len(ended)
-                self._on_episodes_end(ended, infos, step if infos is None else None, log_interval)
+                self._on_episodes_end(ended, infos, log_interval)
         callback.on_rollout_end()
         return RolloutReturn(n_steps * env.num_envs, n_episodes, continue_training=True)
 
-    def _on_episodes_end(
-        self, ended: np.ndarray, infos: list[dict[str, Any]] | None, step: Any, log_interval: int | None
-    ) -> None:
-        """Episode statistics of the envs in ``ended``, from the info dicts or from the array path's ``step``."""
+    def _on_episodes_end(self, ended: np.ndarray, infos: list[dict[str, Any]], log_interval: int | None) -> None:
+        """Episode statistics of the envs in ``ended``, from their info dicts."""
         for i in ended:
-            if infos is None:
-                self.ep_info_buffer.append({"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])})  # type: ignore[union-attr]
-                values = {key: step.episode_info[key][i] for key in self.info_keywords if key in step.episode_info}
-            else:
-                maybe_ep_info = infos[i].get("episode")
-                if maybe_ep_info is not None:
-                    self.ep_info_buffer.append(maybe_ep_info)  # type: ignore[union-attr]
-                if infos[i].get("is_success") is not None:
-                    self.ep_success_buffer.append(infos[i]["is_success"])  # type: ignore[union-attr]
-                values = {key: infos[i][key] for key in self.info_keywords if key in infos[i]}
-            self._add_episode_keywords(values)
+            maybe_ep_info = infos[i].get("episode")
+            if maybe_ep_info is not None:
+                self.ep_info_buffer.append(maybe_ep_info)  # type: ignore[union-attr]
+            if infos[i].get("is_success") is not None:
+                self.ep_success_buffer.append(infos[i]["is_success"])  # type: ignore[union-attr]
+            self._add_episode_keywords(infos[i])
             self._episode_num += 1
             if log_interval is not None and self._episode_num % log_interval == 0:
                 self.dump_logs()

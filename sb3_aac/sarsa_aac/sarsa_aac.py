@@ -4,8 +4,6 @@ import math
 import sys
 import time
 import zipfile
-from collections.abc import Mapping
-from types import MappingProxyType
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -14,7 +12,7 @@ from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
-from sb3_aac.common.array_env import array_path
+from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.model_files import check_model_file, check_policy_class
@@ -24,8 +22,6 @@ from sb3_aac.sarsa_aac.tile_coding import TileKernel, TileTraces
 from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
-# The info of a lane whose episode goes on, on the array path (read-only, shared by those lanes).
-_NO_INFO: Mapping[str, Any] = MappingProxyType({})
 
 TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
 # Schedules are re-evaluated whenever training progress has moved by this much (0.1%), not at every step.
@@ -116,9 +112,8 @@ class SarsaAAC(EpisodeStatsMixin):
     non-finite value the weights are restored to that copy and a ``FloatingPointError`` names the approximators;
     ``save`` after it saves a usable model.
 
-    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; then
-    ``actions`` in the callbacks' locals is the pair (types, scaled parameters) and ``infos`` holds dicts only for
-    the lanes whose episode ended. Other envs are stepped with SB3's ``env.step``.
+    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays, other envs
+    with SB3's ``env.step``; the callbacks' locals are the same on both (see :mod:`sb3_aac.common.array_env`).
     All updates are closed-form numpy on the CPU, vectorised over environments; ``device`` only says where the
     parameters are stored between ``learn()`` calls. Callbacks run after ``env.step`` and before that step's
     update.
@@ -423,14 +418,14 @@ class SarsaAAC(EpisodeStatsMixin):
                 # Callbacks see ``actions`` in locals(): the env's actions, or (types, params) on the array path.
                 actions: np.ndarray | tuple[np.ndarray, np.ndarray]
                 new_obs: np.ndarray
-                infos: list[Mapping[str, Any]]
+                infos: list[dict[str, Any]]
                 if array_env is None:
                     actions = self.policy.spec.to_env(k, params)
                     # SB3 types VecEnv observations as a union; a Box observation space gives an array.
                     new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
                 else:
                     actions = (k, params)
-                    new_obs, rewards, dones, infos = self._step_arrays(array_env, k, params)
+                    new_obs, rewards, dones, infos = step_as_vec_env(array_env, k, self.policy.spec.unscale(params))
                 self.num_timesteps += env.num_envs
 
                 callback.update_locals(locals())
@@ -443,8 +438,7 @@ class SarsaAAC(EpisodeStatsMixin):
                 any_done = bool(dones.any())
                 if any_done:  # episode statistics and success flags exist only where an episode ended
                     ended = np.flatnonzero(dones)
-                    # SB3 annotates the infos as dicts but only reads them.
-                    self._update_info_buffer([infos[i] for i in ended], dones[ended])  # type: ignore[misc]
+                    self._update_info_buffer([infos[i] for i in ended], dones[ended])
                 self._train_step(new_obs, rewards, dones, infos, any_done)
                 self._last_obs, self._last_episode_starts = new_obs, dones
                 if any_done:
@@ -456,24 +450,6 @@ class SarsaAAC(EpisodeStatsMixin):
         callback.on_rollout_end()
         callback.on_training_end()
         return self
-
-    def _step_arrays(
-        self, env: Any, k: np.ndarray, params: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
-        """
-        One step on the array path (:mod:`sb3_aac.common.array_env`), returned as SB3's ``VecEnv.step`` would:
-        ``info`` dicts are built only for the lanes whose episode ended (the others share one empty dict).
-        """
-        step = env.step_arrays(k, self.policy.spec.unscale(params))
-        dones = step.terminated | step.truncated
-        infos: list[Mapping[str, Any]] = [_NO_INFO] * len(dones)
-        for i in np.flatnonzero(dones):
-            info = {key: values[i] for key, values in step.episode_info.items()}
-            info["episode"] = {"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])}
-            info["terminal_observation"] = step.terminal_observations[i]
-            info["TimeLimit.truncated"] = bool(step.truncated[i])
-            infos[i] = info
-        return step.observations, step.rewards, dones, infos
 
     def _update_schedules(self) -> None:
         """Evaluate the exploration and learning-rate schedules at the current progress."""
@@ -494,7 +470,7 @@ class SarsaAAC(EpisodeStatsMixin):
         self.param_noise = self.param_noise_schedule(progress)
 
     def _train_step(
-        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[Mapping[str, Any]], any_done: bool
+        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]], any_done: bool
     ) -> None:
         """One SARSA-AAC update of every approximator, for all envs at once; then choose the next action."""
         policy, kernel, gamma = self.policy, self._kernel, self.gamma
@@ -688,7 +664,7 @@ class SarsaAAC(EpisodeStatsMixin):
         )
         raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy, restored)
 
-    def _on_episodes_end(self, dones: np.ndarray, infos: list[Mapping[str, Any]], log_interval: int | None) -> None:
+    def _on_episodes_end(self, dones: np.ndarray, infos: list[dict[str, Any]], log_interval: int | None) -> None:
         for i in np.flatnonzero(dones):
             self._add_episode_keywords(infos[i])
         self._episode_num += int(dones.sum())
