@@ -25,6 +25,7 @@ from torch.nn import functional as F
 from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
+from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.common.observations import observation_batch
 from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer
@@ -46,7 +47,7 @@ def invert_gradients(grad: th.Tensor, params: th.Tensor) -> th.Tensor:
     return th.where(grad > 0, grad * (1.0 - params), grad * (params + 1.0)) / 2.0
 
 
-class PDQN(EpisodeStatsMixin, OffPolicyAlgorithm):
+class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
     """
     Parameterized Deep Q-Network (P-DQN) for parameterized actions: pick one of K action types and its parameters.
 
@@ -358,6 +359,7 @@ class PDQN(EpisodeStatsMixin, OffPolicyAlgorithm):
             truncated = np.array([bool(d and i.get("TimeLimit.truncated", False)) for d, i in zip(dones, infos, strict=True)])
             self.num_timesteps += env.num_envs
             n_steps += 1
+            check_finite_step(new_obs, rewards, self.num_timesteps)
 
             callback.update_locals(locals())
             if not callback.on_step():

@@ -15,6 +15,7 @@ from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_m
 from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
+from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
 from sb3_aac.common.model_files import check_model_file, check_policy_class
 from sb3_aac.common.observations import observation_batch
 from sb3_aac.sarsa_aac.kernels import Kernel
@@ -61,7 +62,7 @@ def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator
     return k
 
 
-class SarsaAAC(EpisodeStatsMixin):
+class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     """
     SARSA Actor-Actor-Critic (SARSA-AAC) for parameterized actions: pick one of K action types, then a real-valued
     parameter vector for it.
@@ -97,7 +98,8 @@ class SarsaAAC(EpisodeStatsMixin):
     Every approximator takes normalised steps (see :mod:`sb3_aac.sarsa_aac.approximators`): for one sample a learning
     rate of 1 moves a linear approximator's output onto its target, and for a batch of lanes the summed step is
     divided by a bound on how much the lanes' steps add up, so any rate in ``(0, 1]`` is stable whatever the number
-    of lanes or features. Rates are validated to lie in ``(0, 1]``.
+    of lanes or features. Rates are validated to lie in ``[0, 1]``; 0 freezes an approximator (as rl-zoo3's ``enjoy``
+    loads a model only to act, with ``custom_objects={"learning_rate": 0.0}``).
 
     Reward units do not matter: ``return_scale`` is the root mean square of the lanes' discounted returns
     (``G <- gamma * G + r``, reset at episode ends) over all steps so far. When it first becomes non-zero, the
@@ -134,8 +136,8 @@ class SarsaAAC(EpisodeStatsMixin):
     :param policy: The policy model to use (TilePolicy, recommended; MlpPolicy, RbfMlpPolicy, RbfPolicy; or a
         SarsaAACPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
-    :param learning_rate: Critic learning rate (normalised, in ``(0, 1]``), or a schedule of the progress
-        remaining (from 1 to 0) whose values at 1 and 0 are in ``(0, 1]``
+    :param learning_rate: Critic learning rate (normalised, in ``[0, 1]``), or a schedule of the progress
+        remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``
     :param q_learning_rate: Action-type actor learning rate, or a schedule
     :param param_learning_rate: Parameter actor learning rate, or a schedule
     :param gamma: The discount factor
@@ -252,9 +254,9 @@ class SarsaAAC(EpisodeStatsMixin):
         for name in ("learning_rate", "q_learning_rate", "param_learning_rate"):
             rate = getattr(self, name)
             values = (rate(1.0), rate(0.0)) if callable(rate) else (rate,)
-            if not all(isinstance(v, (int, float, np.floating)) and 0 < v <= 1 for v in values):
+            if not all(isinstance(v, (int, float, np.floating)) and 0 <= v <= 1 for v in values):
                 raise ValueError(
-                    f"{name} must be in (0, 1] (a normalised step; 1 lands one sample on its target), got "
+                    f"{name} must be in [0, 1] (a normalised step; 1 lands one sample on its target, 0 learns nothing), got "
                     f"{values[0] if len(values) == 1 else f'a schedule from {values[0]} to {values[1]}'}"
                 )
         if self.type_exploration not in TYPE_EXPLORATIONS:
@@ -427,6 +429,7 @@ class SarsaAAC(EpisodeStatsMixin):
                     actions = (k, params)
                     new_obs, rewards, dones, infos = step_as_vec_env(array_env, k, self.policy.spec.unscale(params))
                 self.num_timesteps += env.num_envs
+                check_finite_step(new_obs, rewards, self.num_timesteps)
 
                 callback.update_locals(locals())
                 if not callback.on_step():
@@ -659,7 +662,7 @@ class SarsaAAC(EpisodeStatsMixin):
         self._traces = None
         remedy = (
             f"Lower the learning rates (learning_rate={self.learning_rate}, q_learning_rate={self.q_learning_rate}, "
-            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in (0, 1]), lower gamma, "
+            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in [0, 1]), lower gamma, "
             "or rescale the rewards"
         )
         raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy, restored)
