@@ -22,6 +22,7 @@ from stable_baselines3.common.utils import (
 from stable_baselines3.common.vec_env import VecEnv
 from torch.nn import functional as F
 
+from sb3_aac.common.action_stats import ActionStats
 from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
@@ -237,6 +238,8 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
                 **self.replay_buffer_kwargs,
             )
         self._convert_train_freq()
+        self._action_stats = ActionStats(self.policy.spec, value_name="q")
+        self._last_dump_timestep = self.num_timesteps
         self.exploration_schedule = LinearSchedule(
             self.exploration_initial_eps, self.exploration_final_eps, self.exploration_fraction
         )
@@ -256,7 +259,7 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
 
     def _excluded_save_params(self) -> list[str]:
         # Per-run state rebuilt by _setup_model (the generator is re-seeded from `seed`).
-        return [*super()._excluded_save_params(), "_rng", "_noise"]
+        return [*super()._excluded_save_params(), "_rng", "_noise", "_action_stats", "_last_dump_timestep"]
 
     def _get_torch_save_params(self) -> tuple[list[str], list[str]]:
         return ["policy", "policy.q_optimizer", "policy.actor_optimizer"], []
@@ -360,6 +363,7 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
             self.num_timesteps += env.num_envs
             n_steps += 1
             check_finite_step(new_obs, rewards, self.num_timesteps)
+            self._action_stats.add(k, params)
 
             callback.update_locals(locals())
             if not callback.on_step():
@@ -406,7 +410,7 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
         update_learning_rate(policy.q_optimizer, q_lr)
         update_learning_rate(policy.actor_optimizer, actor_lr)
         loss_fn, invert = LOSSES[self.loss], policy.param_bounding == "invert_gradients"
-        q_losses, actor_losses = [], []
+        q_losses, actor_losses, q_values = [], [], []
         for _ in range(gradient_steps):
             data = self.replay_buffer.sample(batch_size, self._rng)
             features, next_features = policy.features(data.observations), policy.features(data.next_observations)
@@ -444,6 +448,7 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
                 polyak_update(policy.actor.parameters(), policy.actor_target.parameters(), self.actor_tau)
             q_losses.append(q_loss.detach())
             actor_losses.append(actor_loss.detach())
+            q_values.append(q.detach())
 
         q_loss_values, actor_loss_values = th.stack(q_losses).cpu().numpy(), th.stack(actor_losses).cpu().numpy()
         if not np.isfinite(q_loss_values).all():
@@ -455,6 +460,7 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
         self.logger.record("train/actor_learning_rate", actor_lr)
         self.logger.record("train/critic_loss", float(q_loss_values.mean()))
         self.logger.record("train/actor_loss", float(actor_loss_values.mean()))
+        self._action_stats.add_values(th.cat(q_values).cpu().numpy())
 
     def _raise_divergence(self, what: str) -> None:
         remedy = (
@@ -466,10 +472,16 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
     # ------------------------------------------------------------------ logging
 
     def dump_logs(self) -> None:
-        """Write log data: SB3's off-policy ``rollout/`` and ``time/`` keys, the info keywords and epsilon."""
+        """
+        Write log data: SB3's off-policy ``rollout/`` and ``time/`` keys, the info keywords, epsilon, and the
+        executed actions' type shares and per-type parameter statistics, and the Q values of the training batches
+        (:class:`~sb3_aac.common.action_stats.ActionStats`, value name ``q``) since the last dump.
+        """
         self._record_keyword_means()
         self.logger.record("rollout/exploration_rate", self.exploration_rate)
+        self._action_stats.record(self.logger)
         super().dump_logs()
+        self._last_dump_timestep = self.num_timesteps
 
     def learn(
         self: SelfPDQN,
@@ -480,7 +492,8 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
         reset_num_timesteps: bool = True,
         progress_bar: bool = False,
     ) -> SelfPDQN:
-        return super().learn(
+        """SB3's off-policy ``learn``, with a last log dump at the end (of what was logged since the previous one)."""
+        super().learn(
             total_timesteps=total_timesteps,
             callback=callback,
             log_interval=log_interval,  # type: ignore[arg-type]
@@ -488,6 +501,9 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
             reset_num_timesteps=reset_num_timesteps,
             progress_bar=progress_bar,
         )
+        if log_interval is not None and self.num_timesteps > self._last_dump_timestep:
+            self.dump_logs()
+        return self
 
     # ------------------------------------------------------------------ persistence
 

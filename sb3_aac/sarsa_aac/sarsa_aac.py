@@ -12,6 +12,7 @@ from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
+from sb3_aac.common.action_stats import ActionStats
 from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
@@ -161,9 +162,10 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         the reported success rate, mean episode length, and mean reward over
     :param log_min_timesteps: ``learn(log_interval=n)`` dumps the logs once ``n`` episodes (SB3's off-policy
         convention) *and* at least this many env steps (counted over all lanes) have passed since the previous
-        dump or the start of ``learn``. The spacing in steps keeps logging a fixed share of the work whatever the
-        number of lanes (with 256 lanes, episodes end at every step, so ``n`` episodes alone would dump at every
-        step); 0 dumps every ``n`` episodes, as SB3's DQN does.
+        dump. The spacing in steps keeps logging a fixed share of the work whatever the number of lanes (with 256
+        lanes, episodes end at every step, so ``n`` episodes alone would dump at every step); 0 dumps every ``n``
+        episodes, as SB3's DQN does. The first dump of a ``learn`` call comes after its first ``n`` episodes, without
+        the spacing, and ``learn`` ends with a dump of what it logged since the last one.
     :param tensorboard_log: the log location for tensorboard (if None, no logging)
     :param policy_kwargs: additional arguments to be passed to the policy on creation (see :class:`DenseBankPolicy`
         for MlpPolicy, RbfMlpPolicy and RbfPolicy, :class:`TilePolicy`)
@@ -323,8 +325,8 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         return [
             *super()._excluded_save_params(),
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
-            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
-            *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_traces", "_trace_hits"),
+            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_action_stats"),
+            *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_dumped_in_learn", "_traces", "_trace_hits"),
         ]
 
     # ------------------------------------------------------------------ acting
@@ -388,7 +390,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         :param total_timesteps: The total number of samples (env steps) to train on
         :param callback: callback(s) called at every step with state of the algorithm.
         :param log_interval: Dump the logs every ``log_interval`` finished episodes, but at most once per
-            ``log_min_timesteps`` env steps (see the class docstring; None: never)
+            ``log_min_timesteps`` env steps, and at the end (see the class docstring; None: never)
         :param tb_log_name: the name of the run for TensorBoard logging
         :param reset_num_timesteps: whether or not to reset the current timestep number (used in logging)
         :param progress_bar: Display a progress bar using tqdm and rich.
@@ -399,6 +401,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
             total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
         )
         self._last_dump = (self._episode_num, self.num_timesteps)
+        self._dumped_in_learn = False
         callback.on_training_start(locals(), globals())
         assert self.env is not None
         env = self.env
@@ -447,6 +450,8 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
                 if any_done:
                     self._on_episodes_end(dones, infos, log_interval)
             self._flush_td_chunks()
+            if log_interval is not None and self.num_timesteps > self._last_dump[1]:
+                self.dump_logs()
         finally:
             if self.device.type != "cpu":
                 self.policy.to(self.device)
@@ -527,7 +532,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         self._n_updates += 1
 
         self._pending = (next_obs, next_k, next_params)
-        self._td_chunks.append((delta, q_error, k))
+        self._td_chunks.append((delta, q_error, k, params, current[:, vi]))
         if len(self._td_chunks) >= CHECK_INTERVAL:
             self._flush_td_chunks()
             self._keep_finite_weights()
@@ -599,24 +604,24 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         )
 
     def _reset_train_stats(self) -> None:
-        n_types = self.policy.n_types
         self._lr = np.zeros(self.policy.value_index + 1)
         self._rows = np.arange(self.n_envs)
-        self._td_chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        # Per step since the last flush: delta, the SARSA error, the executed types and scaled parameters, V(s).
+        self._td_chunks: list[tuple[np.ndarray, ...]] = []
         self._hidden_gain = np.ones_like(self._lr)
         self._set_return_units()
         self._lane_returns = None
         self._finite_weights = None
         self._finite_weights_timestep = 0
-        # Sums since the last dump (TRAIN_STAT_FIELDS); type counts.
+        # Sums since the last dump (TRAIN_STAT_FIELDS); the executed actions and the critic's values.
         self._train_stats = np.zeros(len(TRAIN_STAT_FIELDS))
-        self._type_counts = np.zeros(n_types, dtype=np.int64)
+        self._action_stats = ActionStats(self.policy.spec)
 
     def _flush_td_chunks(self) -> None:
         """Fold the per-step TD errors into the running sums, and stop on divergence."""
         if not self._td_chunks:
             return
-        delta, q_error, k = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
+        delta, q_error, k, params, values = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
         self._td_chunks.clear()
         sums = {
             "n": len(delta),
@@ -632,7 +637,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         if not np.isfinite(sums["q_error_sq"]):
             self._raise_divergence("the action-type actor's SARSA error")
         self._train_stats += [sums[name] for name in TRAIN_STAT_FIELDS]
-        self._type_counts += np.bincount(k, minlength=len(self._type_counts))
+        self._action_stats.add(k, params, values)
 
     def _check_weights(self) -> None:
         finite = self.policy.finite_outputs()
@@ -677,7 +682,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         if (
             log_interval is not None
             and self._episode_num - episodes >= log_interval
-            and self.num_timesteps - timesteps >= self.log_min_timesteps
+            and (self.num_timesteps - timesteps >= self.log_min_timesteps or not self._dumped_in_learn)
         ):
             self.dump_logs()
 
@@ -699,9 +704,8 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         record("rollout/exploration_rate", self.exploration_rate)
         stats = dict(zip(TRAIN_STAT_FIELDS, self._train_stats, strict=True))
         n = stats["n"]
+        self._action_stats.record(self.logger)
         if n > 0:
-            for k, count in enumerate(self._type_counts):
-                record(f"rollout/type_freq_{k}", count / n)
             record("train/td_error_mean", stats["delta"] / n)
             record("train/td_error_abs_mean", stats["delta_abs"] / n)
             record("train/critic_loss", stats["delta_sq"] / n)
@@ -718,8 +722,8 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
         self.logger.dump(step=self.num_timesteps)
         self._last_dump = (self._episode_num, self.num_timesteps)
+        self._dumped_in_learn = True
         self._train_stats[:] = 0
-        self._type_counts[:] = 0
 
     # ------------------------------------------------------------------ persistence
 
