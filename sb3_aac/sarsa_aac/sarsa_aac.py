@@ -4,8 +4,6 @@ import math
 import sys
 import time
 import zipfile
-from collections.abc import Mapping
-from types import MappingProxyType
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -14,9 +12,11 @@ from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
-from sb3_aac.common.array_env import array_path
+from sb3_aac.common.action_stats import ActionStats
+from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
+from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
 from sb3_aac.common.model_files import check_model_file, check_policy_class
 from sb3_aac.common.observations import observation_batch
 from sb3_aac.sarsa_aac.kernels import Kernel
@@ -24,8 +24,6 @@ from sb3_aac.sarsa_aac.tile_coding import TileKernel, TileTraces
 from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
-# The info of a lane whose episode goes on, on the array path (read-only, shared by those lanes).
-_NO_INFO: Mapping[str, Any] = MappingProxyType({})
 
 TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
 # Schedules are re-evaluated whenever training progress has moved by this much (0.1%), not at every step.
@@ -65,7 +63,7 @@ def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator
     return k
 
 
-class SarsaAAC(EpisodeStatsMixin):
+class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     """
     SARSA Actor-Actor-Critic (SARSA-AAC) for parameterized actions: pick one of K action types, then a real-valued
     parameter vector for it.
@@ -101,7 +99,8 @@ class SarsaAAC(EpisodeStatsMixin):
     Every approximator takes normalised steps (see :mod:`sb3_aac.sarsa_aac.approximators`): for one sample a learning
     rate of 1 moves a linear approximator's output onto its target, and for a batch of lanes the summed step is
     divided by a bound on how much the lanes' steps add up, so any rate in ``(0, 1]`` is stable whatever the number
-    of lanes or features. Rates are validated to lie in ``(0, 1]``.
+    of lanes or features. Rates are validated to lie in ``[0, 1]``; 0 freezes an approximator (as rl-zoo3's ``enjoy``
+    loads a model only to act, with ``custom_objects={"learning_rate": 0.0}``).
 
     Reward units do not matter: ``return_scale`` is the root mean square of the lanes' discounted returns
     (``G <- gamma * G + r``, reset at episode ends) over all steps so far. When it first becomes non-zero, the
@@ -116,9 +115,8 @@ class SarsaAAC(EpisodeStatsMixin):
     non-finite value the weights are restored to that copy and a ``FloatingPointError`` names the approximators;
     ``save`` after it saves a usable model.
 
-    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; then
-    ``actions`` in the callbacks' locals is the pair (types, scaled parameters) and ``infos`` holds dicts only for
-    the lanes whose episode ended. Other envs are stepped with SB3's ``env.step``.
+    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays, other envs
+    with SB3's ``env.step``; the callbacks' locals are the same on both (see :mod:`sb3_aac.common.array_env`).
     All updates are closed-form numpy on the CPU, vectorised over environments; ``device`` only says where the
     parameters are stored between ``learn()`` calls. Callbacks run after ``env.step`` and before that step's
     update.
@@ -139,8 +137,8 @@ class SarsaAAC(EpisodeStatsMixin):
     :param policy: The policy model to use (TilePolicy, recommended; MlpPolicy, RbfMlpPolicy, RbfPolicy; or a
         SarsaAACPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
-    :param learning_rate: Critic learning rate (normalised, in ``(0, 1]``), or a schedule of the progress
-        remaining (from 1 to 0) whose values at 1 and 0 are in ``(0, 1]``
+    :param learning_rate: Critic learning rate (normalised, in ``[0, 1]``), or a schedule of the progress
+        remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``
     :param q_learning_rate: Action-type actor learning rate, or a schedule
     :param param_learning_rate: Parameter actor learning rate, or a schedule
     :param gamma: The discount factor
@@ -164,9 +162,10 @@ class SarsaAAC(EpisodeStatsMixin):
         the reported success rate, mean episode length, and mean reward over
     :param log_min_timesteps: ``learn(log_interval=n)`` dumps the logs once ``n`` episodes (SB3's off-policy
         convention) *and* at least this many env steps (counted over all lanes) have passed since the previous
-        dump or the start of ``learn``. The spacing in steps keeps logging a fixed share of the work whatever the
-        number of lanes (with 256 lanes, episodes end at every step, so ``n`` episodes alone would dump at every
-        step); 0 dumps every ``n`` episodes, as SB3's DQN does.
+        dump. The spacing in steps keeps logging a fixed share of the work whatever the number of lanes (with 256
+        lanes, episodes end at every step, so ``n`` episodes alone would dump at every step); 0 dumps every ``n``
+        episodes, as SB3's DQN does. The first dump of a ``learn`` call comes after its first ``n`` episodes, without
+        the spacing, and ``learn`` ends with a dump of what it logged since the last one.
     :param tensorboard_log: the log location for tensorboard (if None, no logging)
     :param policy_kwargs: additional arguments to be passed to the policy on creation (see :class:`DenseBankPolicy`
         for MlpPolicy, RbfMlpPolicy and RbfPolicy, :class:`TilePolicy`)
@@ -257,9 +256,9 @@ class SarsaAAC(EpisodeStatsMixin):
         for name in ("learning_rate", "q_learning_rate", "param_learning_rate"):
             rate = getattr(self, name)
             values = (rate(1.0), rate(0.0)) if callable(rate) else (rate,)
-            if not all(isinstance(v, (int, float, np.floating)) and 0 < v <= 1 for v in values):
+            if not all(isinstance(v, (int, float, np.floating)) and 0 <= v <= 1 for v in values):
                 raise ValueError(
-                    f"{name} must be in (0, 1] (a normalised step; 1 lands one sample on its target), got "
+                    f"{name} must be in [0, 1] (a normalised step; 1 lands one sample on its target, 0 learns nothing), got "
                     f"{values[0] if len(values) == 1 else f'a schedule from {values[0]} to {values[1]}'}"
                 )
         if self.type_exploration not in TYPE_EXPLORATIONS:
@@ -326,8 +325,8 @@ class SarsaAAC(EpisodeStatsMixin):
         return [
             *super()._excluded_save_params(),
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
-            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
-            *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_traces", "_trace_hits"),
+            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_action_stats"),
+            *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_dumped_in_learn", "_traces", "_trace_hits"),
         ]
 
     # ------------------------------------------------------------------ acting
@@ -391,7 +390,7 @@ class SarsaAAC(EpisodeStatsMixin):
         :param total_timesteps: The total number of samples (env steps) to train on
         :param callback: callback(s) called at every step with state of the algorithm.
         :param log_interval: Dump the logs every ``log_interval`` finished episodes, but at most once per
-            ``log_min_timesteps`` env steps (see the class docstring; None: never)
+            ``log_min_timesteps`` env steps, and at the end (see the class docstring; None: never)
         :param tb_log_name: the name of the run for TensorBoard logging
         :param reset_num_timesteps: whether or not to reset the current timestep number (used in logging)
         :param progress_bar: Display a progress bar using tqdm and rich.
@@ -402,6 +401,7 @@ class SarsaAAC(EpisodeStatsMixin):
             total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
         )
         self._last_dump = (self._episode_num, self.num_timesteps)
+        self._dumped_in_learn = False
         callback.on_training_start(locals(), globals())
         assert self.env is not None
         env = self.env
@@ -423,15 +423,16 @@ class SarsaAAC(EpisodeStatsMixin):
                 # Callbacks see ``actions`` in locals(): the env's actions, or (types, params) on the array path.
                 actions: np.ndarray | tuple[np.ndarray, np.ndarray]
                 new_obs: np.ndarray
-                infos: list[Mapping[str, Any]]
+                infos: list[dict[str, Any]]
                 if array_env is None:
                     actions = self.policy.spec.to_env(k, params)
                     # SB3 types VecEnv observations as a union; a Box observation space gives an array.
                     new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
                 else:
                     actions = (k, params)
-                    new_obs, rewards, dones, infos = self._step_arrays(array_env, k, params)
+                    new_obs, rewards, dones, infos = step_as_vec_env(array_env, k, self.policy.spec.unscale(params))
                 self.num_timesteps += env.num_envs
+                check_finite_step(new_obs, rewards, self.num_timesteps)
 
                 callback.update_locals(locals())
                 if not callback.on_step():
@@ -443,37 +444,20 @@ class SarsaAAC(EpisodeStatsMixin):
                 any_done = bool(dones.any())
                 if any_done:  # episode statistics and success flags exist only where an episode ended
                     ended = np.flatnonzero(dones)
-                    # SB3 annotates the infos as dicts but only reads them.
-                    self._update_info_buffer([infos[i] for i in ended], dones[ended])  # type: ignore[misc]
+                    self._update_info_buffer([infos[i] for i in ended], dones[ended])
                 self._train_step(new_obs, rewards, dones, infos, any_done)
                 self._last_obs, self._last_episode_starts = new_obs, dones
                 if any_done:
                     self._on_episodes_end(dones, infos, log_interval)
             self._flush_td_chunks()
+            if log_interval is not None and self.num_timesteps > self._last_dump[1]:
+                self.dump_logs()
         finally:
             if self.device.type != "cpu":
                 self.policy.to(self.device)
         callback.on_rollout_end()
         callback.on_training_end()
         return self
-
-    def _step_arrays(
-        self, env: Any, k: np.ndarray, params: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
-        """
-        One step on the array path (:mod:`sb3_aac.common.array_env`), returned as SB3's ``VecEnv.step`` would:
-        ``info`` dicts are built only for the lanes whose episode ended (the others share one empty dict).
-        """
-        step = env.step_arrays(k, self.policy.spec.unscale(params))
-        dones = step.terminated | step.truncated
-        infos: list[Mapping[str, Any]] = [_NO_INFO] * len(dones)
-        for i in np.flatnonzero(dones):
-            info = {key: values[i] for key, values in step.episode_info.items()}
-            info["episode"] = {"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])}
-            info["terminal_observation"] = step.terminal_observations[i]
-            info["TimeLimit.truncated"] = bool(step.truncated[i])
-            infos[i] = info
-        return step.observations, step.rewards, dones, infos
 
     def _update_schedules(self) -> None:
         """Evaluate the exploration and learning-rate schedules at the current progress."""
@@ -494,7 +478,7 @@ class SarsaAAC(EpisodeStatsMixin):
         self.param_noise = self.param_noise_schedule(progress)
 
     def _train_step(
-        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[Mapping[str, Any]], any_done: bool
+        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]], any_done: bool
     ) -> None:
         """One SARSA-AAC update of every approximator, for all envs at once; then choose the next action."""
         policy, kernel, gamma = self.policy, self._kernel, self.gamma
@@ -548,7 +532,7 @@ class SarsaAAC(EpisodeStatsMixin):
         self._n_updates += 1
 
         self._pending = (next_obs, next_k, next_params)
-        self._td_chunks.append((delta, q_error, k))
+        self._td_chunks.append((delta, q_error, k, params, current[:, vi]))
         if len(self._td_chunks) >= CHECK_INTERVAL:
             self._flush_td_chunks()
             self._keep_finite_weights()
@@ -620,24 +604,24 @@ class SarsaAAC(EpisodeStatsMixin):
         )
 
     def _reset_train_stats(self) -> None:
-        n_types = self.policy.n_types
         self._lr = np.zeros(self.policy.value_index + 1)
         self._rows = np.arange(self.n_envs)
-        self._td_chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        # Per step since the last flush: delta, the SARSA error, the executed types and scaled parameters, V(s).
+        self._td_chunks: list[tuple[np.ndarray, ...]] = []
         self._hidden_gain = np.ones_like(self._lr)
         self._set_return_units()
         self._lane_returns = None
         self._finite_weights = None
         self._finite_weights_timestep = 0
-        # Sums since the last dump (TRAIN_STAT_FIELDS); type counts.
+        # Sums since the last dump (TRAIN_STAT_FIELDS); the executed actions and the critic's values.
         self._train_stats = np.zeros(len(TRAIN_STAT_FIELDS))
-        self._type_counts = np.zeros(n_types, dtype=np.int64)
+        self._action_stats = ActionStats(self.policy.spec)
 
     def _flush_td_chunks(self) -> None:
         """Fold the per-step TD errors into the running sums, and stop on divergence."""
         if not self._td_chunks:
             return
-        delta, q_error, k = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
+        delta, q_error, k, params, values = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
         self._td_chunks.clear()
         sums = {
             "n": len(delta),
@@ -653,7 +637,7 @@ class SarsaAAC(EpisodeStatsMixin):
         if not np.isfinite(sums["q_error_sq"]):
             self._raise_divergence("the action-type actor's SARSA error")
         self._train_stats += [sums[name] for name in TRAIN_STAT_FIELDS]
-        self._type_counts += np.bincount(k, minlength=len(self._type_counts))
+        self._action_stats.add(k, params, values)
 
     def _check_weights(self) -> None:
         finite = self.policy.finite_outputs()
@@ -683,12 +667,12 @@ class SarsaAAC(EpisodeStatsMixin):
         self._traces = None
         remedy = (
             f"Lower the learning rates (learning_rate={self.learning_rate}, q_learning_rate={self.q_learning_rate}, "
-            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in (0, 1]), lower gamma, "
+            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in [0, 1]), lower gamma, "
             "or rescale the rewards"
         )
         raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy, restored)
 
-    def _on_episodes_end(self, dones: np.ndarray, infos: list[Mapping[str, Any]], log_interval: int | None) -> None:
+    def _on_episodes_end(self, dones: np.ndarray, infos: list[dict[str, Any]], log_interval: int | None) -> None:
         for i in np.flatnonzero(dones):
             self._add_episode_keywords(infos[i])
         self._episode_num += int(dones.sum())
@@ -698,7 +682,7 @@ class SarsaAAC(EpisodeStatsMixin):
         if (
             log_interval is not None
             and self._episode_num - episodes >= log_interval
-            and self.num_timesteps - timesteps >= self.log_min_timesteps
+            and (self.num_timesteps - timesteps >= self.log_min_timesteps or not self._dumped_in_learn)
         ):
             self.dump_logs()
 
@@ -720,9 +704,8 @@ class SarsaAAC(EpisodeStatsMixin):
         record("rollout/exploration_rate", self.exploration_rate)
         stats = dict(zip(TRAIN_STAT_FIELDS, self._train_stats, strict=True))
         n = stats["n"]
+        self._action_stats.record(self.logger)
         if n > 0:
-            for k, count in enumerate(self._type_counts):
-                record(f"rollout/type_freq_{k}", count / n)
             record("train/td_error_mean", stats["delta"] / n)
             record("train/td_error_abs_mean", stats["delta_abs"] / n)
             record("train/critic_loss", stats["delta_sq"] / n)
@@ -739,8 +722,8 @@ class SarsaAAC(EpisodeStatsMixin):
         record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
         self.logger.dump(step=self.num_timesteps)
         self._last_dump = (self._episode_num, self.num_timesteps)
+        self._dumped_in_learn = True
         self._train_stats[:] = 0
-        self._type_counts[:] = 0
 
     # ------------------------------------------------------------------ persistence
 
