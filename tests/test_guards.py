@@ -102,3 +102,22 @@ def test_a_model_loads_to_act_as_rl_zoo3_enjoy_loads_it(case, tmp_path) -> None:
     obs = np.stack([model.observation_space.sample() for _ in range(20)])
     expected, got = model.predict(obs, deterministic=True)[0], loaded.predict(obs, deterministic=True)[0]
     assert [a[0] for a in expected] == [a[0] for a in got]
+
+
+@pytest.mark.parametrize(
+    ("algo", "policy", "kwargs", "message"),
+    [
+        ("SarsaAAC", "MlpPolicy", dict(policy_kwargs=dict(hidden_units=100_000_000)), r"approximators .* would take .* GiB"),
+        ("SarsaAAC", "MlpPolicy", dict(policy_kwargs=dict(hidden_units=1e8)), "hidden_units must be a whole number"),
+        ("SarsaAAC", "RbfPolicy", dict(policy_kwargs=dict(n_rbf=2.5)), "n_rbf must be a whole number"),
+        ("MPDQN", "MlpPolicy", dict(buffer_size=10**10), r"replay buffer \(buffer_size=10,000,000,000\) would take"),
+        ("MPDQN", "MlpPolicy", dict(buffer_size=1e6), "buffer_size must be an integer >= 1"),
+        ("PDQN", "MlpPolicy", dict(policy_kwargs=dict(net_arch=[-5])), r"net_arch must hold whole numbers in 1 .. 65,536"),
+        ("PDQN", "MlpPolicy", dict(policy_kwargs=dict(actor_net_arch="64")), "actor_net_arch must be a list"),
+    ],
+)
+def test_sizes_beyond_the_limits_are_refused_at_construction(algo, policy, kwargs, message) -> None:
+    import sb3_aac
+
+    with pytest.raises(ValueError, match=message):
+        getattr(sb3_aac, algo)(policy, ParameterizedTargetEnv(), **kwargs)

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import io
 import math
-import numbers
 import os
 import pathlib
 from collections.abc import Iterable
@@ -19,6 +18,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.type_aliases import MaybeCallback
 
 from sb3_aac.common.output_files import replaced_atomically
+from sb3_aac.common.sizes import is_whole
 
 
 def check_total_timesteps(total_timesteps: Any) -> int:
@@ -28,8 +28,8 @@ def check_total_timesteps(total_timesteps: Any) -> int:
     :raises ValueError: unless it is a whole number >= 1 (``learn(-5)``, ``learn(nan)`` and ``learn("100")`` would
         otherwise return at once or fail deep inside SB3)
     """
-    whole = isinstance(total_timesteps, numbers.Integral) and not isinstance(total_timesteps, bool)
-    if not (whole or (isinstance(total_timesteps, float) and total_timesteps.is_integer())) or total_timesteps < 1:
+    whole = is_whole(total_timesteps) or (isinstance(total_timesteps, float) and total_timesteps.is_integer())
+    if not whole or total_timesteps < 1:
         raise ValueError(f"total_timesteps must be a whole number of env steps >= 1, got {total_timesteps!r}")
     return int(total_timesteps)
 
