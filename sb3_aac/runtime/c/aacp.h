@@ -1049,6 +1049,7 @@ struct aacp_policy {
     double *tile_weight;      /* (F, A) */
     double *phi;              /* scratch: features that are not 0 */
     size_t *active;           /* scratch: their indices (tiles: each coding's active feature) */
+    double *outputs;          /* scratch: K outputs, then the chosen type's scaled parameters */
     double *params;           /* scratch: the chosen type's parameters */
 };
 
@@ -1057,7 +1058,7 @@ void aacp_free(aacp_policy *p) {
         return;
     free(p->offsets), free(p->feature_a), free(p->feature_b), free(p->w), free(p->b), free(p->w2), free(p->b2);
     free(p->param_low), free(p->param_high), free(p->tile_inputs), free(p->tile_a), free(p->tile_b), free(p->tile_limit);
-    free(p->tile_strides), free(p->tile_bases), free(p->tile_weight), free(p->phi), free(p->active), free(p->params);
+    free(p->tile_strides), free(p->tile_bases), free(p->tile_weight), free(p->phi), free(p->active), free(p->outputs), free(p->params);
     free(p);
 }
 
@@ -1194,7 +1195,8 @@ static int aacp__build(aacp__ctx *c, const aacp__spec *s, const unsigned char *b
         if (p->offsets[i + 1] - p->offsets[i] > p->max_dim)
             p->max_dim = p->offsets[i + 1] - p->offsets[i];
     p->params = (double *)aacp__alloc(p->max_dim, sizeof *p->params);
-    if (!p->params)
+    p->outputs = (double *)aacp__alloc(p->k > p->max_dim ? p->k : p->max_dim, sizeof *p->outputs);
+    if (!p->params || !p->outputs)
         goto nomem;
     if (s->features == AACP__TILES) {
         double *inputs = aacp__array(s, blob, "tile_inputs", &n), *offsets = aacp__array(s, blob, "tile_offsets", NULL);
@@ -1493,12 +1495,18 @@ static double aacp__output(const aacp_policy *p, size_t a, size_t n) {
     }
 }
 
-static double aacp__tile_output(const aacp_policy *p, size_t a) {
-    double s = 0.0;
-    size_t c;
-    for (c = 0; c < p->c; c++)
-        s += p->tile_weight[p->active[c] * p->a + a];
-    return s + p->b[a];
+/* Outputs first .. first + count - 1 of a tile head, into out: one pass over the codings' rows of the (F, A) table. */
+static void aacp__tile_outputs(const aacp_policy *p, size_t first, size_t count, double *out) {
+    size_t c, a;
+    for (a = 0; a < count; a++)
+        out[a] = 0.0;
+    for (c = 0; c < p->c; c++) {
+        const double *row = p->tile_weight + p->active[c] * p->a + first;
+        for (a = 0; a < count; a++)
+            out[a] += row[a];
+    }
+    for (a = 0; a < count; a++)
+        out[a] += p->b[first + a];
 }
 
 /* unscale_value: the affine map [-1, 1] -> [low, high], clipped to the bounds. */
@@ -1522,12 +1530,18 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
             for (jj = 0; jj < p->g; jj++) {
                 size_t e = i * p->g + jj;
                 double position;
+                int64_t coordinate;
                 if (p->tile_strides[e] == 0)
                     continue; /* a padded slot */
-                position = floor(x[p->tile_inputs[e]] * p->tile_a[e] - p->tile_b[e]);
-                position = position >= 0 ? position : 0; /* clip to [0, resolution] (NaN: 0) */
-                position = position <= p->tile_limit[e] ? position : p->tile_limit[e];
-                feature += (int64_t)position * p->tile_strides[e];
+                /* clip(floor(position), 0, resolution) for a whole resolution, without a libm call (NaN: 0) */
+                position = x[p->tile_inputs[e]] * p->tile_a[e] - p->tile_b[e];
+                if (!(position >= 0))
+                    coordinate = 0;
+                else if (position >= p->tile_limit[e])
+                    coordinate = (int64_t)p->tile_limit[e];
+                else
+                    coordinate = (int64_t)position; /* truncation is floor for position >= 0 */
+                feature += coordinate * p->tile_strides[e];
             }
             p->active[i] = (size_t)feature;
         }
@@ -1548,18 +1562,22 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
         }
         n = p->d;
     }
-    best = tiles ? aacp__tile_output(p, 0) : aacp__output(p, 0, n);
-    for (i = 1; i < p->k; i++) { /* the first maximum */
-        double q = tiles ? aacp__tile_output(p, i) : aacp__output(p, i, n);
-        if (q > best)
-            best = q, k = i;
-    }
+    if (tiles)
+        aacp__tile_outputs(p, 0, p->k, p->outputs);
+    else
+        for (i = 0; i < p->k; i++)
+            p->outputs[i] = aacp__output(p, i, n);
+    for (i = 1, best = p->outputs[0]; i < p->k; i++) /* the first maximum */
+        if (p->outputs[i] > best)
+            best = p->outputs[i], k = i;
     start = p->offsets[k], dim = p->offsets[k + 1] - start;
-    for (jj = 0; jj < dim; jj++) {
-        size_t a = p->k + start + jj;
-        double scaled = tiles ? aacp__tile_output(p, a) : aacp__output(p, a, n);
-        p->params[jj] = aacp__unscale(scaled, p->param_low[start + jj], p->param_high[start + jj]);
-    }
+    if (tiles)
+        aacp__tile_outputs(p, p->k + start, dim, p->outputs);
+    else
+        for (jj = 0; jj < dim; jj++)
+            p->outputs[jj] = aacp__output(p, p->k + start + jj, n);
+    for (jj = 0; jj < dim; jj++)
+        p->params[jj] = aacp__unscale(p->outputs[jj], p->param_low[start + jj], p->param_high[start + jj]);
     action->type = p->start + (int64_t)k, action->index = k, action->n_params = dim, action->params = p->params;
     return AACP_OK;
 }
