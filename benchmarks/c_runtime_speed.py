@@ -32,6 +32,7 @@ import numpy as np
 import robocup_dribble
 from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
 from sb3_aac.runtime.c import header_path
+from sb3_aac.runtime.format import SUPPORTED_VERSIONS
 
 ENV_PROFILE = "v11"  # the paper's env, RoboCupDribblePaper-v0
 TIMER = Path(__file__).resolve().parent / "c" / "aacp_speed.c"
@@ -45,7 +46,9 @@ CONFIGS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("RbfMlpPolicy", {}),
     ("TilePolicy", {}),
 )
-QUICK_CONFIGS = (CONFIGS[0], CONFIGS[2], CONFIGS[5], CONFIGS[6])
+if 3 in SUPPORTED_VERSIONS:  # the networks head (format version 3): DeepPolicy
+    CONFIGS = (*CONFIGS, ("DeepPolicy", {}))
+QUICK_CONFIGS = (CONFIGS[0], CONFIGS[2], CONFIGS[5], *CONFIGS[6:])
 
 
 def build_timer(folder: Path, cflags: list[str]) -> Path:

@@ -3,8 +3,9 @@
  *
  * One C99 header with no dependency beyond the C standard library (and libm: link with -lm). It reads
  * every file the Python reference reader (`sb3_aac.runtime.RuntimePolicy`) reads: format `sb3-aac-policy`
- * versions 1 and 2, scaled-input or Gaussian-RBF features (with or without the RBF window) under a linear or
- * one-tanh-layer head, and tile coding. It checks a file as that reader does (length, magic bytes, SHA-256,
+ * versions 1 to 3, scaled-input or Gaussian-RBF features (with or without the RBF window) under a linear or
+ * one-tanh-layer head, tile coding, and (version 3) the feed-forward networks of a DeepPolicy (linear, layer-norm
+ * and tanh/relu/leaky-relu layers). It checks a file as that reader does (length, magic bytes, SHA-256,
  * strict UTF-8 JSON header, format and version, every field and array, finite values) and never reads past
  * the buffer it is given; then `aacp_act` returns the decision `RuntimePolicy.act` returns: the same action
  * type, and that type's parameters in the env's units (clipped to their bounds) within 1e-5. The file
@@ -35,7 +36,7 @@
  * scratch buffers: aacp_act on one policy is not thread-safe; give each thread its own (load it twice).
  *
  * Numbers: the arithmetic is the Python runtime's, operation for operation where it decides something (the
- * folded input scaling, the RBF window test, the tile coordinates), so window and tile decisions are the
+ * folded input scaling, the RBF window test, the tile coordinates, the layer norms), so window and tile decisions are the
  * same bit for bit; sums may run in another order (outputs agree to ~1e-15, decisions differ only at exact
  * ties of that size). Do not compile the implementation with -ffast-math or -ffp-contract=fast.
  * Parameters are returned as double; Python casts them to each type's Box dtype (usually float32), so a
@@ -683,6 +684,8 @@ static const char *aacp__show(const aacp__json *j, long i, char *buf, size_t n) 
     return buf;
 }
 
+static void *aacp__alloc(size_t n, size_t size) { return malloc((n ? n : 1) * size); }
+
 /* Saturating arithmetic on sizes (a crafted header may name any integers). */
 #define AACP__HUGE INT64_MAX
 static int64_t aacp__mul(int64_t a, int64_t b) {
@@ -709,15 +712,26 @@ static int64_t aacp__shape_product(const aacp__json *j, long i, int64_t minimum)
 /* ------------------------------------------------------------------------------------------ header checks */
 
 enum { AACP__SCALED, AACP__RBF, AACP__TILES };
-enum { AACP__LINEAR, AACP__TANH_MLP };
+enum { AACP__LINEAR, AACP__TANH_MLP, AACP__NETWORKS };
+enum { AACP__LAYER_LINEAR, AACP__LAYER_NORM, AACP__LAYER_TANH, AACP__LAYER_RELU, AACP__LAYER_LEAKY_RELU };
 
-#define AACP__MAX_ARRAYS 16
 typedef struct aacp__array_spec {
-    const char *name;
+    char name[64];
     int ndim;
     int64_t shape[3];
     int64_t offset; /* in the blob, filled by the placement check */
 } aacp__array_spec;
+
+typedef struct aacp__layer_spec {
+    int kind, affine; /* AACP__LAYER_*; a layer norm with weight and bias */
+    int64_t in, out;  /* values read and written */
+    double constant;  /* a layer norm's eps, a leaky ReLU's slope */
+} aacp__layer_spec;
+
+typedef struct aacp__network_spec {
+    int64_t start, stop; /* the outputs it writes */
+    size_t first, count; /* its layers */
+} aacp__network_spec;
 
 /* What a checked header says. */
 typedef struct aacp__spec {
@@ -725,10 +739,19 @@ typedef struct aacp__spec {
     int features, head, layout;
     double window_z2; /* features with z*z above this are 0 (INFINITY: no window) */
     int64_t *offsets; /* K + 1 parameter offsets */
+    int version3;     /* the file's version is 3 */
     long arrays;      /* the header's arrays table */
-    int n_arrays;
-    aacp__array_spec array[AACP__MAX_ARRAYS];
+    int n_arrays, cap_arrays;
+    aacp__array_spec *array;
+    size_t n_networks, n_layers;
+    aacp__network_spec *networks;
+    aacp__layer_spec *layers;
 } aacp__spec;
+
+static void aacp__spec_free(aacp__spec *s) {
+    free(s->offsets), free(s->array), free(s->networks), free(s->layers);
+    s->offsets = NULL, s->array = NULL, s->networks = NULL, s->layers = NULL;
+}
 
 typedef struct aacp__ctx {
     aacp__json *j;
@@ -744,41 +767,70 @@ static long aacp__need(aacp__ctx *c, long obj, const char *key, const char *wher
     return i;
 }
 
-static void aacp__add_array(aacp__spec *s, const char *name, int ndim, int64_t d0, int64_t d1, int64_t d2) {
-    aacp__array_spec *a = &s->array[s->n_arrays++];
-    a->name = name, a->ndim = ndim, a->shape[0] = d0, a->shape[1] = d1, a->shape[2] = d2, a->offset = 0;
+/* Add an expected array (0, or -1 out of memory). */
+static int aacp__add_array(aacp__spec *s, const char *name, int ndim, int64_t d0, int64_t d1, int64_t d2) {
+    aacp__array_spec *a;
+    if (s->n_arrays == s->cap_arrays) {
+        int cap = s->cap_arrays ? 2 * s->cap_arrays : 16;
+        aacp__array_spec *grown = (aacp__array_spec *)realloc(s->array, (size_t)cap * sizeof *grown);
+        if (!grown)
+            return -1;
+        s->array = grown, s->cap_arrays = cap;
+    }
+    a = &s->array[s->n_arrays++];
+    snprintf(a->name, sizeof a->name, "%s", name);
+    a->ndim = ndim, a->shape[0] = d0, a->shape[1] = d1, a->shape[2] = d2, a->offset = 0;
+    return 0;
 }
 
-/* The arrays a checked header needs, with their shapes (Python: expected_array_shapes). */
-static void aacp__expected_arrays(aacp__spec *s) {
+/* The arrays a checked header needs, with their shapes (Python: expected_array_shapes); 0, or -1 out of memory. */
+static int aacp__expected_arrays(aacp__spec *s) {
+    int bad = 0;
+    size_t i, l;
     s->n_arrays = 0;
-    aacp__add_array(s, "obs_low", 1, s->d, 0, 0);
-    aacp__add_array(s, "obs_high", 1, s->d, 0, 0);
-    aacp__add_array(s, "obs_mid", 1, s->d, 0, 0);
-    aacp__add_array(s, "obs_half", 1, s->d, 0, 0);
-    aacp__add_array(s, "param_low", 1, s->n_params, 0, 0);
-    aacp__add_array(s, "param_high", 1, s->n_params, 0, 0);
+    bad |= aacp__add_array(s, "obs_low", 1, s->d, 0, 0);
+    bad |= aacp__add_array(s, "obs_high", 1, s->d, 0, 0);
+    bad |= aacp__add_array(s, "obs_mid", 1, s->d, 0, 0);
+    bad |= aacp__add_array(s, "obs_half", 1, s->d, 0, 0);
+    bad |= aacp__add_array(s, "param_low", 1, s->n_params, 0, 0);
+    bad |= aacp__add_array(s, "param_high", 1, s->n_params, 0, 0);
     if (s->features == AACP__RBF) {
-        aacp__add_array(s, "rbf_centers", 2, s->d, s->m, 0);
-        aacp__add_array(s, "rbf_widths", 2, s->d, s->m, 0);
+        bad |= aacp__add_array(s, "rbf_centers", 2, s->d, s->m, 0);
+        bad |= aacp__add_array(s, "rbf_widths", 2, s->d, s->m, 0);
     }
     if (s->features == AACP__TILES) {
-        aacp__add_array(s, "tile_inputs", 2, s->c, s->g, 0);
-        aacp__add_array(s, "tile_offsets", 2, s->c, s->g, 0);
-        aacp__add_array(s, "tile_resolution", 2, s->c, s->g, 0);
-        aacp__add_array(s, "tile_strides", 2, s->c, s->g, 0);
-        aacp__add_array(s, "tile_bases", 1, s->c, 0, 0);
-        aacp__add_array(s, "tile_weight", 2, s->f, s->a, 0);
-        aacp__add_array(s, "bias", 1, s->a, 0, 0);
+        bad |= aacp__add_array(s, "tile_inputs", 2, s->c, s->g, 0);
+        bad |= aacp__add_array(s, "tile_offsets", 2, s->c, s->g, 0);
+        bad |= aacp__add_array(s, "tile_resolution", 2, s->c, s->g, 0);
+        bad |= aacp__add_array(s, "tile_strides", 2, s->c, s->g, 0);
+        bad |= aacp__add_array(s, "tile_bases", 1, s->c, 0, 0);
+        bad |= aacp__add_array(s, "tile_weight", 2, s->f, s->a, 0);
+        bad |= aacp__add_array(s, "bias", 1, s->a, 0, 0);
+    } else if (s->head == AACP__NETWORKS) { /* layer l of network i: net{i}_{l}_weight, net{i}_{l}_bias */
+        for (i = 0; i < s->n_networks; i++)
+            for (l = 0; l < s->networks[i].count; l++) {
+                const aacp__layer_spec *layer = &s->layers[s->networks[i].first + l];
+                char weight[64], bias[64];
+                snprintf(weight, sizeof weight, "net%lu_%lu_weight", (unsigned long)i, (unsigned long)l);
+                snprintf(bias, sizeof bias, "net%lu_%lu_bias", (unsigned long)i, (unsigned long)l);
+                if (layer->kind == AACP__LAYER_LINEAR) {
+                    bad |= aacp__add_array(s, weight, 2, layer->out, layer->in, 0);
+                    bad |= aacp__add_array(s, bias, 1, layer->out, 0, 0);
+                } else if (layer->kind == AACP__LAYER_NORM && layer->affine) {
+                    bad |= aacp__add_array(s, weight, 1, layer->out, 0, 0);
+                    bad |= aacp__add_array(s, bias, 1, layer->out, 0, 0);
+                }
+            }
     } else if (s->head == AACP__LINEAR) {
-        aacp__add_array(s, "weight", 2, s->a, s->f, 0);
-        aacp__add_array(s, "bias", 1, s->a, 0, 0);
+        bad |= aacp__add_array(s, "weight", 2, s->a, s->f, 0);
+        bad |= aacp__add_array(s, "bias", 1, s->a, 0, 0);
     } else {
-        aacp__add_array(s, "weight1", 3, s->a, s->h, s->f);
-        aacp__add_array(s, "bias1", 2, s->a, s->h, 0);
-        aacp__add_array(s, "weight2", 2, s->a, s->h, 0);
-        aacp__add_array(s, "bias2", 1, s->a, 0, 0);
+        bad |= aacp__add_array(s, "weight1", 3, s->a, s->h, s->f);
+        bad |= aacp__add_array(s, "bias1", 2, s->a, s->h, 0);
+        bad |= aacp__add_array(s, "weight2", 2, s->a, s->h, 0);
+        bad |= aacp__add_array(s, "bias2", 1, s->a, 0, 0);
     }
+    return bad;
 }
 
 /* The features and head sections (Python: _check_features_and_head). */
@@ -843,11 +895,140 @@ head:
         if (!aacp__whole(j, units, 1, &s->h))
             return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "hidden_units=%s", aacp__show(j, units, b1, sizeof b1));
         s->head = AACP__TANH_MLP;
+    } else if (aacp__string_is(j, head_type, "networks")) {
+        if (!s->version3 || s->features != AACP__SCALED)
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "a networks head needs version >= 3 and scaled features");
+        if (aacp__need(c, head, "networks", "approximators.head.networks") < 0)
+            return AACP_ERR_HEADER;
+        s->head = AACP__NETWORKS;
     } else if (aacp__string_is(j, head_type, "linear"))
         s->head = AACP__LINEAR;
     else
-        return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "unknown head type %s (known: 'linear', 'tanh_mlp')",
+        return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "unknown head type %s (known: 'linear', 'tanh_mlp', 'networks')",
                          aacp__show(j, head_type, b2, sizeof b2));
+    return AACP_OK;
+}
+
+static int aacp__by_start(const void *a, const void *b) {
+    const aacp__network_spec *x = (const aacp__network_spec *)a, *y = (const aacp__network_spec *)b;
+    return x->start < y->start ? -1 : x->start > y->start;
+}
+
+/* One layer reading `size` values (Python: _check_layer); its size after, or -1 with the error set. */
+static int64_t aacp__check_layer(aacp__ctx *c, long layer, int64_t size, size_t i, size_t l, aacp__layer_spec *out) {
+    aacp__json *j = c->j;
+    long kind = aacp__need(c, layer, "type", "approximators.head.networks[].layers[].type");
+    char b1[64];
+    if (kind < 0)
+        return -1;
+    memset(out, 0, sizeof *out);
+    out->in = out->out = size;
+    if (aacp__string_is(j, kind, "linear")) {
+        long in = aacp__need(c, layer, "in", "approximators.head.networks[].layers[].in"), n_out;
+        if (in < 0 || (n_out = aacp__need(c, layer, "out", "approximators.head.networks[].layers[].out")) < 0)
+            return -1;
+        if (!aacp__whole(j, in, INT64_MIN, NULL) || j->nodes[in].i != size || !aacp__whole(j, n_out, 1, &out->out))
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
+                             "network %lu, layer %lu: a linear layer on %lld values needs in=%lld and out >= 1", (unsigned long)i,
+                             (unsigned long)l, (long long)size, (long long)size), -1;
+        out->kind = AACP__LAYER_LINEAR;
+    } else if (aacp__string_is(j, kind, "layernorm")) {
+        long eps = aacp__need(c, layer, "eps", "approximators.head.networks[].layers[].eps"), n, affine;
+        if (eps < 0 || (n = aacp__need(c, layer, "size", "approximators.head.networks[].layers[].size")) < 0)
+            return -1;
+        if (!aacp__equals(j, n, size))
+            goto norm;
+        if ((affine = aacp__need(c, layer, "affine", "approximators.head.networks[].layers[].affine")) < 0)
+            return -1;
+        if (!(aacp__is(j, affine, AACP__TRUE) || aacp__is(j, affine, AACP__FALSE)) || !aacp__is(j, eps, AACP__FLOAT) ||
+            !(j->nodes[eps].d > 0 && j->nodes[eps].d < INFINITY))
+            goto norm;
+        out->kind = AACP__LAYER_NORM, out->affine = aacp__is(j, affine, AACP__TRUE), out->constant = j->nodes[eps].d;
+    } else if (aacp__string_is(j, kind, "activation")) {
+        long function = aacp__need(c, layer, "function", "approximators.head.networks[].layers[].function"), slope;
+        if (function < 0)
+            return -1;
+        if (aacp__string_is(j, function, "tanh"))
+            out->kind = AACP__LAYER_TANH;
+        else if (aacp__string_is(j, function, "relu"))
+            out->kind = AACP__LAYER_RELU;
+        else if (aacp__string_is(j, function, "leaky_relu")) {
+            if ((slope = aacp__need(c, layer, "slope", "approximators.head.networks[].layers[].slope")) < 0)
+                return -1;
+            if (!aacp__is(j, slope, AACP__FLOAT) || !isfinite(j->nodes[slope].d))
+                return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "network %lu, layer %lu: leaky_relu needs a finite slope",
+                                 (unsigned long)i, (unsigned long)l), -1;
+            out->kind = AACP__LAYER_LEAKY_RELU, out->constant = j->nodes[slope].d;
+        } else
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
+                             "network %lu, layer %lu: unknown activation %s (known: ['tanh', 'relu', 'leaky_relu'])",
+                             (unsigned long)i, (unsigned long)l, aacp__show(j, function, b1, sizeof b1)), -1;
+    } else
+        return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
+                         "network %lu, layer %lu: unknown layer type %s (known: ['linear', 'layernorm', 'activation'])",
+                         (unsigned long)i, (unsigned long)l, aacp__show(j, kind, b1, sizeof b1)), -1;
+    return out->out;
+norm:
+    return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
+                     "network %lu, layer %lu: a layer norm on %lld values needs size=%lld, eps > 0 and affine true/false",
+                     (unsigned long)i, (unsigned long)l, (long long)size, (long long)size), -1;
+}
+
+/* A networks head (Python: check_networks): feed-forward networks reading the D scaled inputs, whose columns cover
+   the A outputs exactly once. */
+static int aacp__check_networks(aacp__ctx *c, aacp__spec *s, long networks) {
+    aacp__json *j = c->j;
+    aacp__network_spec *sorted;
+    size_t i, n_layers = 0;
+    long net, layer;
+    int64_t covered = 0;
+    if (!aacp__is(j, networks, AACP__ARRAY) || j->nodes[networks].count == 0)
+        return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "networks must be a non-empty list");
+    for (net = j->nodes[networks].child; net >= 0; net = j->nodes[net].next) {
+        long layers = aacp__member(j, net, "layers");
+        n_layers += aacp__is(j, layers, AACP__ARRAY) ? j->nodes[layers].count : 0;
+    }
+    s->n_networks = j->nodes[networks].count;
+    s->networks = (aacp__network_spec *)aacp__alloc(s->n_networks, sizeof *s->networks);
+    s->layers = (aacp__layer_spec *)aacp__alloc(n_layers, sizeof *s->layers);
+    if (!s->networks || !s->layers)
+        return aacp__set(c->error, AACP_ERR_MEMORY, "out of memory reading the networks");
+    for (i = 0, net = j->nodes[networks].child; net >= 0; net = j->nodes[net].next, i++) {
+        aacp__network_spec *spec = &s->networks[i];
+        long columns = aacp__need(c, net, "columns", "approximators.head.networks[].columns"), layers;
+        int64_t size = s->d, l = 0;
+        if (columns < 0)
+            return AACP_ERR_HEADER;
+        if (!aacp__is(j, columns, AACP__ARRAY) || j->nodes[columns].count != 2 ||
+            !aacp__whole(j, j->nodes[columns].child, 0, &spec->start) ||
+            !aacp__whole(j, j->nodes[j->nodes[columns].child].next, 0, &spec->stop) || !(spec->start < spec->stop) ||
+            spec->stop > s->a)
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "network %lu: columns must be [start, stop) within [0, %lld]",
+                             (unsigned long)i, (long long)s->a);
+        if ((layers = aacp__need(c, net, "layers", "approximators.head.networks[].layers")) < 0)
+            return AACP_ERR_HEADER;
+        if (!aacp__is(j, layers, AACP__ARRAY))
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "network %lu: layers must be a list", (unsigned long)i);
+        spec->first = s->n_layers, spec->count = j->nodes[layers].count;
+        for (layer = j->nodes[layers].child; layer >= 0; layer = j->nodes[layer].next, l++)
+            if ((size = aacp__check_layer(c, layer, size, i, (size_t)l, &s->layers[s->n_layers++])) < 0)
+                return AACP_ERR_HEADER;
+        if (size != spec->stop - spec->start)
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "network %lu ends with %lld values for its %lld columns",
+                             (unsigned long)i, (long long)size, (long long)(spec->stop - spec->start));
+    }
+    /* Each output exactly once: sorted by start, the ranges must tile [0, A). */
+    sorted = (aacp__network_spec *)aacp__alloc(s->n_networks, sizeof *sorted);
+    if (!sorted)
+        return aacp__set(c->error, AACP_ERR_MEMORY, "out of memory reading the networks");
+    memcpy(sorted, s->networks, s->n_networks * sizeof *sorted);
+    qsort(sorted, s->n_networks, sizeof *sorted, aacp__by_start);
+    for (i = 0; i < s->n_networks && sorted[i].start == covered; i++)
+        covered = sorted[i].stop;
+    free(sorted);
+    if (i < s->n_networks || covered != s->a)
+        return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "the networks' columns must cover each of the %lld outputs exactly once",
+                         (long long)s->a);
     return AACP_OK;
 }
 
@@ -944,10 +1125,11 @@ static int aacp__check_header(aacp__ctx *c, aacp__spec *s) {
     if (!aacp__string_is(j, format, AACP_FORMAT_NAME))
         return aacp__bad(c->error, c->name, AACP_ERR_FORMAT, "format is %s, expected '%s'", aacp__show(j, format, b1, sizeof b1),
                          AACP_FORMAT_NAME);
-    if (!aacp__equals(j, version, 1) && !aacp__equals(j, version, 2))
+    if (!aacp__equals(j, version, 1) && !aacp__equals(j, version, 2) && !aacp__equals(j, version, 3))
         return aacp__bad(c->error, c->name, AACP_ERR_FORMAT,
-                         "unknown format version %s; this reader supports [1, 2] (a newer sb3-aac wrote it? use a newer aacp.h)",
+                         "unknown format version %s; this reader supports [1, 2, 3] (a newer sb3-aac wrote it? use a newer aacp.h)",
                          aacp__show(j, version, b1, sizeof b1));
+    s->version3 = aacp__equals(j, version, 3); /* a networks head needs version >= 3 */
     if ((obs = aacp__need(c, 0, "observation", "observation")) < 0 || (action = aacp__need(c, 0, "action", "action")) < 0 ||
         (approx = aacp__need(c, 0, "approximators", "approximators")) < 0 ||
         (size = aacp__need(c, obs, "size", "observation.size")) < 0 || (shape = aacp__need(c, obs, "shape", "observation.shape")) < 0)
@@ -966,6 +1148,8 @@ static int aacp__check_header(aacp__ctx *c, aacp__spec *s) {
         return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "n_features=%s, n_outputs=%s: both must be whole numbers >= 1",
                          aacp__show(j, n_features, b1, sizeof b1), aacp__show(j, n_outputs, b2, sizeof b2));
     if ((code = aacp__check_features_and_head(c, s, features, head)) != AACP_OK)
+        return code;
+    if (s->head == AACP__NETWORKS && (code = aacp__check_networks(c, s, aacp__member(j, head, "networks"))) != AACP_OK)
         return code;
     if ((outputs = aacp__need(c, approx, "outputs", "approximators.outputs")) < 0)
         return AACP_ERR_HEADER;
@@ -989,7 +1173,8 @@ static int aacp__check_header(aacp__ctx *c, aacp__spec *s) {
 static int aacp__check_placements(aacp__ctx *c, aacp__spec *s) {
     aacp__json *j = c->j;
     int n;
-    aacp__expected_arrays(s);
+    if (aacp__expected_arrays(s) != 0)
+        return aacp__set(c->error, AACP_ERR_MEMORY, "out of memory listing the arrays");
     for (n = 0; n < s->n_arrays; n++) {
         aacp__array_spec *a = &s->array[n];
         long entry = aacp__member(j, s->arrays, a->name), offset, nbytes, dtype, shape, e;
@@ -1032,6 +1217,18 @@ static int aacp__check_placements(aacp__ctx *c, aacp__spec *s) {
 
 /* ------------------------------------------------------------------------------------------------ policy */
 
+typedef struct aacp__layer {
+    int kind;       /* AACP__LAYER_* */
+    size_t in, out; /* values read and written */
+    double constant; /* a layer norm's eps, a leaky ReLU's slope */
+    double *w, *b;  /* linear: weight (out, in), bias (out); affine layer norm: weight, bias (out); else NULL */
+} aacp__layer;
+
+typedef struct aacp__network {
+    size_t start, stop;  /* the outputs it writes */
+    size_t first, count; /* its layers */
+} aacp__network;
+
 struct aacp_policy {
     size_t d, k, n_params, a, f, m, h, c, g, max_dim;
     int features, head, layout;
@@ -1047,6 +1244,11 @@ struct aacp_policy {
     int64_t *tile_strides;    /* (C, k) */
     int64_t *tile_bases;      /* (C) */
     double *tile_weight;      /* (F, A) */
+    size_t n_networks, n_layers, width; /* networks head: the widest layer (or D) */
+    aacp__network *networks;
+    aacp__layer *layers;
+    double *h0, *h1;          /* scratch: a layer's input and output (width values each) */
+    unsigned char *computed;  /* scratch: networks evaluated for this decision */
     double *phi;              /* scratch: features that are not 0 */
     size_t *active;           /* scratch: their indices (tiles: each coding's active feature) */
     double *outputs;          /* scratch: K outputs, then the chosen type's scaled parameters */
@@ -1059,6 +1261,12 @@ void aacp_free(aacp_policy *p) {
     free(p->offsets), free(p->feature_a), free(p->feature_b), free(p->w), free(p->b), free(p->w2), free(p->b2);
     free(p->param_low), free(p->param_high), free(p->tile_inputs), free(p->tile_a), free(p->tile_b), free(p->tile_limit);
     free(p->tile_strides), free(p->tile_bases), free(p->tile_weight), free(p->phi), free(p->active), free(p->outputs), free(p->params);
+    if (p->layers) {
+        size_t l;
+        for (l = 0; l < p->n_layers; l++)
+            free(p->layers[l].w), free(p->layers[l].b);
+    }
+    free(p->networks), free(p->layers), free(p->h0), free(p->h1), free(p->computed);
     free(p);
 }
 
@@ -1100,8 +1308,6 @@ static double *aacp__array(const aacp__spec *s, const unsigned char *blob, const
         *count = n;
     return out;
 }
-
-static void *aacp__alloc(size_t n, size_t size) { return malloc((n ? n : 1) * size); }
 
 static int aacp__all_positive(const aacp__spec *s, const unsigned char *blob, const char *name) {
     const aacp__array_spec *a = aacp__find(s, name);
@@ -1172,7 +1378,50 @@ static int aacp__check_values(aacp__ctx *c, const aacp__spec *s, const unsigned 
     return AACP_OK;
 }
 
-/* The policy of a checked file: BankForward's or TileForward's folded constants, and scratch buffers. */
+static double *aacp__array(const aacp__spec *s, const unsigned char *blob, const char *name, size_t *count);
+
+/* A networks head (NetworkForward): the scaled inputs' constants, each layer and its arrays; 0, or -1 out of memory. */
+static int aacp__build_networks(const aacp__spec *s, const unsigned char *blob, aacp_policy *p, const double *mid,
+                                const double *half) {
+    size_t i, l;
+    p->n_networks = s->n_networks, p->n_layers = s->n_layers, p->width = p->d;
+    p->networks = (aacp__network *)calloc(s->n_networks ? s->n_networks : 1, sizeof *p->networks);
+    p->layers = (aacp__layer *)calloc(s->n_layers ? s->n_layers : 1, sizeof *p->layers);
+    p->feature_a = (double *)aacp__alloc(p->d, sizeof *p->feature_a);
+    p->feature_b = (double *)aacp__alloc(p->d, sizeof *p->feature_b);
+    p->computed = (unsigned char *)aacp__alloc(s->n_networks, 1);
+    p->phi = (double *)aacp__alloc(p->d, sizeof *p->phi); /* the scaled inputs */
+    if (!p->networks || !p->layers || !p->feature_a || !p->feature_b || !p->computed || !p->phi)
+        return -1;
+    for (i = 0; i < p->d; i++) { /* NetworkForward: a = 1 / half, b = mid * a */
+        p->feature_a[i] = 1.0 / half[i];
+        p->feature_b[i] = mid[i] * p->feature_a[i];
+    }
+    for (i = 0; i < s->n_networks; i++) {
+        const aacp__network_spec *net = &s->networks[i];
+        p->networks[i].start = (size_t)net->start, p->networks[i].stop = (size_t)net->stop;
+        p->networks[i].first = net->first, p->networks[i].count = net->count;
+        for (l = 0; l < net->count; l++) {
+            const aacp__layer_spec *spec = &s->layers[net->first + l];
+            aacp__layer *layer = &p->layers[net->first + l];
+            layer->kind = spec->kind, layer->in = (size_t)spec->in, layer->out = (size_t)spec->out, layer->constant = spec->constant;
+            if (layer->out > p->width)
+                p->width = layer->out;
+            if (spec->kind == AACP__LAYER_LINEAR || (spec->kind == AACP__LAYER_NORM && spec->affine)) {
+                char weight[64], bias[64];
+                snprintf(weight, sizeof weight, "net%lu_%lu_weight", (unsigned long)i, (unsigned long)l);
+                snprintf(bias, sizeof bias, "net%lu_%lu_bias", (unsigned long)i, (unsigned long)l);
+                layer->w = aacp__array(s, blob, weight, NULL), layer->b = aacp__array(s, blob, bias, NULL);
+                if (!layer->w || !layer->b)
+                    return -1;
+            }
+        }
+    }
+    p->h0 = (double *)aacp__alloc(p->width, sizeof *p->h0), p->h1 = (double *)aacp__alloc(p->width, sizeof *p->h1);
+    return p->h0 && p->h1 ? 0 : -1;
+}
+
+/* The policy of a checked file: BankForward's, TileForward's or NetworkForward's constants, and scratch buffers. */
 static int aacp__build(aacp__ctx *c, const aacp__spec *s, const unsigned char *blob, aacp_policy **out) {
     aacp_policy *p = (aacp_policy *)calloc(1, sizeof *p);
     double *mid = NULL, *half = NULL;
@@ -1195,7 +1444,7 @@ static int aacp__build(aacp__ctx *c, const aacp__spec *s, const unsigned char *b
         if (p->offsets[i + 1] - p->offsets[i] > p->max_dim)
             p->max_dim = p->offsets[i + 1] - p->offsets[i];
     p->params = (double *)aacp__alloc(p->max_dim, sizeof *p->params);
-    p->outputs = (double *)aacp__alloc(p->k > p->max_dim ? p->k : p->max_dim, sizeof *p->outputs);
+    p->outputs = (double *)aacp__alloc(p->a, sizeof *p->outputs); /* A >= K, A >= every dim */
     if (!p->params || !p->outputs)
         goto nomem;
     if (s->features == AACP__TILES) {
@@ -1224,6 +1473,9 @@ static int aacp__build(aacp__ctx *c, const aacp__spec *s, const unsigned char *b
         }
         free(inputs), free(offsets), free(strides), free(bases);
         if (!ok)
+            goto nomem;
+    } else if (s->head == AACP__NETWORKS) {
+        if (aacp__build_networks(s, blob, p, mid, half) != 0)
             goto nomem;
     } else {
         size_t m = p->m ? p->m : 1;
@@ -1321,7 +1573,7 @@ static int aacp__load(const unsigned char *data, size_t size, const char *name, 
         code = aacp__check_values(&c, &s, data + blob_start);
     if (code == AACP_OK)
         code = aacp__build(&c, &s, data + blob_start, policy);
-    free(s.offsets);
+    aacp__spec_free(&s);
     aacp__json_free(&j);
     return code;
 }
@@ -1394,7 +1646,7 @@ static int aacp__load_stream(FILE *f, const char *path, aacp_policy **policy, aa
     else
         header_code = aacp__check_header(&c, &s);
     aacp__json_free(&j);
-    free(s.offsets);
+    aacp__spec_free(&s);
     if (header_code != AACP_OK) {
         /* A regular file of sane size whose checksum fails: say that (an altered byte is the likelier story). */
         aacp_error saved;
@@ -1509,6 +1761,65 @@ static void aacp__tile_outputs(const aacp_policy *p, size_t first, size_t count,
         out[a] += p->b[first + a];
 }
 
+/* Network i on the scaled inputs x (NetworkForward.network): its values go to outputs[start .. stop). */
+static void aacp__network_outputs(aacp_policy *p, size_t i, const double *x) {
+    const aacp__network *net = &p->networks[i];
+    const double *h = x;
+    double *out = p->h0;
+    size_t n = p->d, l, o, k;
+    for (l = 0; l < net->count; l++) {
+        const aacp__layer *layer = &p->layers[net->first + l];
+        if (layer->kind == AACP__LAYER_LINEAR) {
+            for (o = 0; o < layer->out; o++) {
+                const double *row = layer->w + o * layer->in;
+                double sum = 0.0;
+                for (k = 0; k < layer->in; k++)
+                    sum += row[k] * h[k];
+                out[o] = sum + layer->b[o];
+            }
+            n = layer->out;
+        } else if (layer->kind == AACP__LAYER_NORM) {
+            /* (h - mean) / sqrt(mean squared deviation + eps), then * weight + bias if affine */
+            double mean = 0.0, square = 0.0, inv_std;
+            for (k = 0; k < n; k++)
+                mean += h[k];
+            mean /= (double)n;
+            for (k = 0; k < n; k++) {
+                out[k] = h[k] - mean;
+                square += out[k] * out[k];
+            }
+            inv_std = 1.0 / sqrt(square / (double)n + layer->constant);
+            for (k = 0; k < n; k++)
+                out[k] *= inv_std;
+            if (layer->w)
+                for (k = 0; k < n; k++)
+                    out[k] = out[k] * layer->w[k] + layer->b[k];
+        } else if (layer->kind == AACP__LAYER_TANH) {
+            for (k = 0; k < n; k++)
+                out[k] = tanh(h[k]);
+        } else if (layer->kind == AACP__LAYER_RELU) {
+            for (k = 0; k < n; k++)
+                out[k] = h[k] > 0.0 ? h[k] : 0.0;
+        } else {
+            for (k = 0; k < n; k++)
+                out[k] = h[k] > 0.0 ? h[k] : layer->constant * h[k];
+        }
+        h = out; /* the next layer reads this one's values and writes the other buffer */
+        out = out == p->h0 ? p->h1 : p->h0;
+    }
+    memcpy(p->outputs + net->start, h, (net->stop - net->start) * sizeof *h);
+}
+
+/* Evaluate every network not yet computed that writes one of the outputs [first, stop). */
+static void aacp__networks_for(aacp_policy *p, size_t first, size_t stop, const double *x) {
+    size_t i;
+    for (i = 0; i < p->n_networks; i++)
+        if (!p->computed[i] && p->networks[i].start < stop && first < p->networks[i].stop) {
+            aacp__network_outputs(p, i, x);
+            p->computed[i] = 1;
+        }
+}
+
 /* unscale_value: the affine map [-1, 1] -> [low, high], clipped to the bounds. */
 static double aacp__unscale(double scaled, double low, double high) {
     double weight = 0.5 * scaled, value = low * (0.5 - weight) + high * (0.5 + weight);
@@ -1519,7 +1830,7 @@ static double aacp__unscale(double scaled, double low, double high) {
 static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_error *error) {
     size_t i, jj, n = 0, k = 0, dim, start;
     double total = 0.0, best;
-    int tiles = p->features == AACP__TILES;
+    int tiles = p->features == AACP__TILES, networks = p->head == AACP__NETWORKS;
     for (i = 0; i < p->d; i++)
         total += x[i] * x[i];
     if (!isfinite(total)) /* one reduction, as RuntimePolicy: NaN, inf (and absurd magnitudes) reach the sum */
@@ -1545,6 +1856,11 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
             }
             p->active[i] = (size_t)feature;
         }
+    } else if (networks) { /* the scaled inputs, x * a - b */
+        for (i = 0; i < p->d; i++)
+            p->phi[i] = x[i] * p->feature_a[i] - p->feature_b[i];
+        memset(p->computed, 0, p->n_networks);
+        aacp__networks_for(p, 0, p->k, p->phi); /* the networks that write Q */
     } else if (p->m) {
         for (i = 0; i < p->d; i++)
             for (jj = 0; jj < p->m; jj++) {
@@ -1564,7 +1880,7 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
     }
     if (tiles)
         aacp__tile_outputs(p, 0, p->k, p->outputs);
-    else
+    else if (!networks)
         for (i = 0; i < p->k; i++)
             p->outputs[i] = aacp__output(p, i, n);
     for (i = 1, best = p->outputs[0]; i < p->k; i++) /* the first maximum */
@@ -1573,7 +1889,10 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
     start = p->offsets[k], dim = p->offsets[k + 1] - start;
     if (tiles)
         aacp__tile_outputs(p, p->k + start, dim, p->outputs);
-    else
+    else if (networks) { /* the networks that write the chosen type's parameters, moved to the front */
+        aacp__networks_for(p, p->k + start, p->k + start + dim, p->phi);
+        memmove(p->outputs, p->outputs + p->k + start, dim * sizeof *p->outputs);
+    } else
         for (jj = 0; jj < dim; jj++)
             p->outputs[jj] = aacp__output(p, p->k + start + jj, n);
     for (jj = 0; jj < dim; jj++)
