@@ -535,6 +535,9 @@ def test_cpp_example_decides_as_python(drivers, tmp_path: Path) -> None:
 
 def test_header_ships_with_the_package() -> None:
     """aacp.h is package data, and ``sb3-aac c-header`` prints where it is."""
+    tomllib = pytest.importorskip("tomllib")
+    package_data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["sb3_aac"]
+    assert "runtime/c/aacp.h" in package_data
     assert header_path().is_file()
     assert header_path().read_text().startswith("/*\n * aacp.h")
     result = subprocess.run(
