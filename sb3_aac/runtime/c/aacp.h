@@ -1725,25 +1725,50 @@ int aacp_load_file(const char *path, aacp_policy **policy, aacp_error *error) {
 
 /* ------------------------------------------------------------------------------------------------ acting */
 
-/* Output a of a bank head on the features phi[0..n) at indices active[0..n) (the others are 0). */
+/* Dot products in four partial sums (independent chains the CPU overlaps; the order is fixed, so every build of
+   this header sums alike): row[0..n) . x[0..n), and row[index[f]] * x[f] over f < n. */
+static double aacp__dot(const double *row, const double *x, size_t n) {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    size_t k = 0;
+    for (; k + 4 <= n; k += 4) {
+        s0 += row[k] * x[k];
+        s1 += row[k + 1] * x[k + 1];
+        s2 += row[k + 2] * x[k + 2];
+        s3 += row[k + 3] * x[k + 3];
+    }
+    for (; k < n; k++)
+        s0 += row[k] * x[k];
+    return (s0 + s1) + (s2 + s3);
+}
+
+static double aacp__sparse_dot(const double *row, const size_t *index, const double *x, size_t n) {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    size_t k = 0;
+    for (; k + 4 <= n; k += 4) {
+        s0 += row[index[k]] * x[k];
+        s1 += row[index[k + 1]] * x[k + 1];
+        s2 += row[index[k + 2]] * x[k + 2];
+        s3 += row[index[k + 3]] * x[k + 3];
+    }
+    for (; k < n; k++)
+        s0 += row[index[k]] * x[k];
+    return (s0 + s1) + (s2 + s3);
+}
+
+/* Output a of a bank head on the features phi[0..n) at indices active[0..n) (the others are 0; n == F: all). */
 static double aacp__output(const aacp_policy *p, size_t a, size_t n) {
-    size_t f, u;
+    size_t u;
     if (p->head == AACP__TANH_MLP) {
         double acc = 0.0;
         for (u = 0; u < p->h; u++) {
             const double *row = p->w + (a * p->h + u) * p->f;
-            double s = 0.0;
-            for (f = 0; f < n; f++)
-                s += row[p->active[f]] * p->phi[f];
+            double s = n == p->f ? aacp__dot(row, p->phi, n) : aacp__sparse_dot(row, p->active, p->phi, n);
             acc += tanh(s + p->b[a * p->h + u]) * p->w2[a * p->h + u];
         }
         return acc + p->b2[a];
     } else {
         const double *row = p->w + a * p->f;
-        double s = 0.0;
-        for (f = 0; f < n; f++)
-            s += row[p->active[f]] * p->phi[f];
-        return s + p->b[a];
+        return (n == p->f ? aacp__dot(row, p->phi, n) : aacp__sparse_dot(row, p->active, p->phi, n)) + p->b[a];
     }
 }
 
@@ -1770,13 +1795,8 @@ static void aacp__network_outputs(aacp_policy *p, size_t i, const double *x) {
     for (l = 0; l < net->count; l++) {
         const aacp__layer *layer = &p->layers[net->first + l];
         if (layer->kind == AACP__LAYER_LINEAR) {
-            for (o = 0; o < layer->out; o++) {
-                const double *row = layer->w + o * layer->in;
-                double sum = 0.0;
-                for (k = 0; k < layer->in; k++)
-                    sum += row[k] * h[k];
-                out[o] = sum + layer->b[o];
-            }
+            for (o = 0; o < layer->out; o++)
+                out[o] = aacp__dot(layer->w + o * layer->in, h, layer->in) + layer->b[o];
             n = layer->out;
         } else if (layer->kind == AACP__LAYER_NORM) {
             /* (h - mean) / sqrt(mean squared deviation + eps), then * weight + bias if affine */
