@@ -36,9 +36,9 @@
  * scratch buffers: aacp_act on one policy is not thread-safe; give each thread its own (load it twice).
  *
  * Numbers: the arithmetic is the Python runtime's, operation for operation where it decides something (the
- * folded input scaling, the RBF window test, the tile coordinates, the layer norms), so window and tile decisions are the
- * same bit for bit; sums may run in another order (outputs agree to ~1e-15, decisions differ only at exact
- * ties of that size). Do not compile the implementation with -ffast-math or -ffp-contract=fast.
+ * folded input scaling, the RBF window test, the tile coordinates, the layer norms), so window and tile
+ * decisions are the same bit for bit; sums run in another order (outputs agree to ~1e-15, decisions could
+ * differ only at exact ties of that size). Do not compile it with -ffast-math or -ffp-contract=fast.
  * Parameters are returned as double; Python casts them to each type's Box dtype (usually float32), so a
  * value differs from Python's by at most that cast's rounding.
  *
@@ -46,8 +46,8 @@
  * parser is strict (no NaN/Infinity literals), nests at most AACP_MAX_NESTING deep, holds at most
  * AACP_MAX_JSON_VALUES values, and refuses integers outside int64 where the header needs a number (type_start).
  * C99 cannot tell a regular file from a pipe: aacp_load_file reads a file header first, as the Python
- * reader does, so a device or endless stream is refused after its first 16 bytes (no magic), but a pipe
- * that blocks blocks.
+ * reader does, so a device or endless stream is refused after its first 16 bytes (no magic), but reading
+ * a pipe that never writes waits.
  *
  * License: MIT (part of sb3-aac).
  */
@@ -1648,13 +1648,21 @@ static int aacp__load_stream(FILE *f, const char *path, aacp_policy **policy, aa
     aacp__json_free(&j);
     aacp__spec_free(&s);
     if (header_code != AACP_OK) {
-        /* A regular file of sane size whose checksum fails: say that (an altered byte is the likelier story). */
+        /* A seekable file of sane size whose checksum fails: say that (an altered byte is the likelier story). */
         aacp_error saved;
+        long here = ftell(f), end = -1;
         memset(&saved, 0, sizeof saved);
         if (error)
             saved = *error;
-        code = aacp__read(f, &buf, &len, (size_t)AACP_MAX_BLOB_BYTES + AACP__DIGEST + 1, path, error);
-        if (code == AACP_OK && len >= header_end + AACP__DIGEST && len <= header_end + AACP_MAX_BLOB_BYTES + AACP__DIGEST) {
+        if (here >= 0 && fseek(f, 0, SEEK_END) == 0)
+            end = ftell(f);
+        code = here >= 0 && end >= here && fseek(f, here, SEEK_SET) == 0 ? AACP_OK : AACP_ERR_IO;
+        if (code == AACP_OK && (uint64_t)(end - here) >= AACP__DIGEST &&
+            (uint64_t)(end - here) <= AACP_MAX_BLOB_BYTES + AACP__DIGEST)
+            code = aacp__read(f, &buf, &len, (size_t)(end - here), path, error);
+        else
+            code = AACP_ERR_IO;
+        if (code == AACP_OK && len == header_end + (size_t)(end - here)) {
             unsigned char digest[AACP__DIGEST];
             aacp__sha256(buf, len - AACP__DIGEST, digest);
             if (memcmp(digest, buf + len - AACP__DIGEST, AACP__DIGEST) != 0) {
