@@ -158,6 +158,7 @@ typedef char aacp__double_is_binary64[(sizeof(double) == 8 && sizeof(uint64_t) =
 #define AACP__DIGEST 32   /* SHA-256 at the end */
 #define AACP__ALIGN 8
 #define AACP__MAX_INT_DIGITS 4300 /* Python refuses to parse longer integers */
+#define AACP__CHECKSUM_MISMATCH "SHA-256 checksum mismatch: the file is truncated, corrupted or was altered; export it again"
 static const unsigned char aacp__magic[8] = {'S', 'B', '3', 'A', 'A', 'C', 'P', 0};
 static const char *const aacp__layouts[4] = {"nested", "flat", "shared", "oneof"};
 static const char *const aacp__param_dtypes[3] = {"float16", "float32", "float64"};
@@ -222,7 +223,8 @@ static void aacp__sha_block(uint32_t h[8], const unsigned char *block) {
     }
     a = h[0], b = h[1], c = h[2], d = h[3], e = h[4], f = h[5], g = h[6], hh = h[7];
     for (t = 0; t < 64; t++) {
-        uint32_t t1 = hh + (AACP__ROTR(e, 6) ^ AACP__ROTR(e, 11) ^ AACP__ROTR(e, 25)) + ((e & f) ^ (~e & g)) + aacp__sha_k[t] + w[t];
+        uint32_t t1 = hh + (AACP__ROTR(e, 6) ^ AACP__ROTR(e, 11) ^ AACP__ROTR(e, 25)) + ((e & f) ^ (~e & g)) +
+                      aacp__sha_k[t] + w[t];
         uint32_t t2 = (AACP__ROTR(a, 2) ^ AACP__ROTR(a, 13) ^ AACP__ROTR(a, 22)) + ((a & b) ^ (a & c) ^ (b & c));
         hh = g, g = f, f = e, e = d + t1, d = c, c = b, b = a, a = t1 + t2;
     }
@@ -368,7 +370,8 @@ static void aacp__put_utf8(aacp__json *j, unsigned cp) {
     else if (cp < 0x800)
         o[0] = (char)(0xC0 | cp >> 6), o[1] = (char)(0x80 | (cp & 0x3F)), j->used += 2;
     else if (cp < 0x10000)
-        o[0] = (char)(0xE0 | cp >> 12), o[1] = (char)(0x80 | ((cp >> 6) & 0x3F)), o[2] = (char)(0x80 | (cp & 0x3F)), j->used += 3;
+        o[0] = (char)(0xE0 | cp >> 12), o[1] = (char)(0x80 | ((cp >> 6) & 0x3F)), o[2] = (char)(0x80 | (cp & 0x3F)),
+        j->used += 3;
     else
         o[0] = (char)(0xF0 | cp >> 18), o[1] = (char)(0x80 | ((cp >> 12) & 0x3F)), o[2] = (char)(0x80 | ((cp >> 6) & 0x3F)),
         o[3] = (char)(0x80 | (cp & 0x3F)), j->used += 4;
@@ -477,7 +480,8 @@ static long aacp__number(aacp__json *j) {
             magnitude = magnitude * 10 + digit;
         }
         if (!node->big)
-            node->i = *start == '-' ? (magnitude == (uint64_t)INT64_MAX + 1 ? INT64_MIN : -(int64_t)magnitude) : (int64_t)magnitude;
+            node->i = *start != '-' ? (int64_t)magnitude
+                                    : magnitude == (uint64_t)INT64_MAX + 1 ? INT64_MIN : -(int64_t)magnitude;
     } else {
         /* strtod reads the locale's decimal point: give it that. */
         const char *point = localeconv()->decimal_point;
@@ -633,7 +637,8 @@ static long aacp__member(const aacp__json *j, long obj, const char *key) {
 static int aacp__is(const aacp__json *j, long i, int type) { return i >= 0 && j->nodes[i].type == type; }
 
 static int aacp__string_is(const aacp__json *j, long i, const char *s) {
-    return aacp__is(j, i, AACP__STRING) && j->nodes[i].len == strlen(s) && memcmp(j->strings + j->nodes[i].str, s, j->nodes[i].len) == 0;
+    return aacp__is(j, i, AACP__STRING) && j->nodes[i].len == strlen(s) &&
+           memcmp(j->strings + j->nodes[i].str, s, j->nodes[i].len) == 0;
 }
 
 /* A whole number >= minimum (an integer: not a bool, not a float, as Python's `type(v) is int`). */
@@ -929,8 +934,8 @@ static int64_t aacp__check_layer(aacp__ctx *c, long layer, int64_t size, size_t 
             return -1;
         if (!aacp__whole(j, in, INT64_MIN, NULL) || j->nodes[in].i != size || !aacp__whole(j, n_out, 1, &out->out))
             return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
-                             "network %lu, layer %lu: a linear layer on %lld values needs in=%lld and out >= 1", (unsigned long)i,
-                             (unsigned long)l, (long long)size, (long long)size), -1;
+                             "network %lu, layer %lu: a linear layer on %lld values needs in=%lld and out >= 1",
+                             (unsigned long)i, (unsigned long)l, (long long)size, (long long)size), -1;
         out->kind = AACP__LAYER_LINEAR;
     } else if (aacp__string_is(j, kind, "layernorm")) {
         long eps = aacp__need(c, layer, "eps", "approximators.head.networks[].layers[].eps"), n, affine;
@@ -1027,14 +1032,15 @@ static int aacp__check_networks(aacp__ctx *c, aacp__spec *s, long networks) {
         covered = sorted[i].stop;
     free(sorted);
     if (i < s->n_networks || covered != s->a)
-        return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "the networks' columns must cover each of the %lld outputs exactly once",
-                         (long long)s->a);
+        return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
+                         "the networks' columns must cover each of the %lld outputs exactly once", (long long)s->a);
     return AACP_OK;
 }
 
 /* `outputs` == {"q": [0, K], "params": [K, K + P], "value": K + P}, with Python's dict/list equality. */
 static int aacp__outputs_ok(const aacp__json *j, long outputs, int64_t k, int64_t p) {
-    long q = aacp__member(j, outputs, "q"), params = aacp__member(j, outputs, "params"), value = aacp__member(j, outputs, "value");
+    long q = aacp__member(j, outputs, "q"), params = aacp__member(j, outputs, "params");
+    long value = aacp__member(j, outputs, "value");
     long i;
     if (q < 0 || params < 0 || value < 0)
         return 0;
@@ -1044,7 +1050,8 @@ static int aacp__outputs_ok(const aacp__json *j, long outputs, int64_t k, int64_
         if (!((n == 1 && key[0] == 'q') || (n == 6 && !memcmp(key, "params", 6)) || (n == 5 && !memcmp(key, "value", 5))))
             return 0;
     }
-    if (!aacp__is(j, q, AACP__ARRAY) || j->nodes[q].count != 2 || !aacp__is(j, params, AACP__ARRAY) || j->nodes[params].count != 2)
+    if (!aacp__is(j, q, AACP__ARRAY) || j->nodes[q].count != 2 || !aacp__is(j, params, AACP__ARRAY) ||
+        j->nodes[params].count != 2)
         return 0;
     return aacp__equals(j, j->nodes[q].child, 0) && aacp__equals(j, j->nodes[j->nodes[q].child].next, k) &&
            aacp__equals(j, j->nodes[params].child, k) && aacp__equals(j, j->nodes[j->nodes[params].child].next, k + p) &&
@@ -1054,7 +1061,8 @@ static int aacp__outputs_ok(const aacp__json *j, long outputs, int64_t k, int64_
 static int aacp__check_action(aacp__ctx *c, aacp__spec *s, long action) {
     aacp__json *j = c->j;
     char b1[64], b2[64];
-    long k = aacp__need(c, action, "n_types", "action.n_types"), start = aacp__need(c, action, "type_start", "action.type_start");
+    long k = aacp__need(c, action, "n_types", "action.n_types");
+    long start = aacp__need(c, action, "type_start", "action.type_start");
     long layout = aacp__need(c, action, "layout", "action.layout"), types = aacp__need(c, action, "types", "action.types");
     long t, n_params;
     int64_t offset = 0, index = 0;
@@ -1067,7 +1075,8 @@ static int aacp__check_action(aacp__ctx *c, aacp__spec *s, long action) {
             s->layout = i;
     if (s->layout < 0)
         return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
-                         "unknown action layout %s (known: ['nested', 'flat', 'shared', 'oneof'])", aacp__show(j, layout, b1, sizeof b1));
+                         "unknown action layout %s (known: ['nested', 'flat', 'shared', 'oneof'])",
+                         aacp__show(j, layout, b1, sizeof b1));
     if (aacp__is(j, start, AACP__INT) && j->nodes[start].big)
         return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "action.type_start beyond 64 bits");
     if (!aacp__whole(j, k, 1, &s->k) || !aacp__whole(j, start, INT64_MIN, &s->start) || !aacp__is(j, types, AACP__ARRAY) ||
@@ -1087,21 +1096,21 @@ static int aacp__check_action(aacp__ctx *c, aacp__spec *s, long action) {
             return AACP_ERR_HEADER;
         product = aacp__shape_product(j, shape, 0);
         if (!aacp__whole(j, dim, 0, &d) || product < 0 || product != d)
-            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "action type %lld: dim %s and shape disagree", (long long)index,
-                             aacp__show(j, dim, b1, sizeof b1));
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "action type %lld: dim %s and shape disagree",
+                             (long long)index, aacp__show(j, dim, b1, sizeof b1));
         if ((toff = aacp__need(c, t, "offset", "action.types[].offset")) < 0)
             return AACP_ERR_HEADER;
         if (!aacp__whole(j, toff, 0, NULL) || j->nodes[toff].i != offset)
-            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "action type %lld: offset %s, expected %lld", (long long)index,
-                             aacp__show(j, toff, b1, sizeof b1), (long long)offset);
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "action type %lld: offset %s, expected %lld",
+                             (long long)index, aacp__show(j, toff, b1, sizeof b1), (long long)offset);
         if ((dtype = aacp__need(c, t, "dtype", "action.types[].dtype")) < 0)
             return AACP_ERR_HEADER;
         for (i = 0; i < 3; i++)
             known |= aacp__string_is(j, dtype, aacp__param_dtypes[i]);
         if (!known)
             return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
-                             "action type %lld: parameter dtype %s is not one of ['float16', 'float32', 'float64']", (long long)index,
-                             aacp__show(j, dtype, b1, sizeof b1));
+                             "action type %lld: parameter dtype %s is not one of ['float16', 'float32', 'float64']",
+                             (long long)index, aacp__show(j, dtype, b1, sizeof b1));
         s->offsets[index] = offset;
         offset = aacp__add(offset, d);
     }
@@ -1123,20 +1132,23 @@ static int aacp__check_header(aacp__ctx *c, aacp__spec *s) {
     int64_t product;
     int code;
     if (!aacp__string_is(j, format, AACP_FORMAT_NAME))
-        return aacp__bad(c->error, c->name, AACP_ERR_FORMAT, "format is %s, expected '%s'", aacp__show(j, format, b1, sizeof b1),
-                         AACP_FORMAT_NAME);
+        return aacp__bad(c->error, c->name, AACP_ERR_FORMAT, "format is %s, expected '%s'",
+                         aacp__show(j, format, b1, sizeof b1), AACP_FORMAT_NAME);
     if (!aacp__equals(j, version, 1) && !aacp__equals(j, version, 2) && !aacp__equals(j, version, 3))
         return aacp__bad(c->error, c->name, AACP_ERR_FORMAT,
-                         "unknown format version %s; this reader supports [1, 2, 3] (a newer sb3-aac wrote it? use a newer aacp.h)",
+                         "unknown format version %s; this reader supports [1, 2, 3] "
+                         "(a newer sb3-aac wrote it? use a newer aacp.h)",
                          aacp__show(j, version, b1, sizeof b1));
     s->version3 = aacp__equals(j, version, 3); /* a networks head needs version >= 3 */
     if ((obs = aacp__need(c, 0, "observation", "observation")) < 0 || (action = aacp__need(c, 0, "action", "action")) < 0 ||
         (approx = aacp__need(c, 0, "approximators", "approximators")) < 0 ||
-        (size = aacp__need(c, obs, "size", "observation.size")) < 0 || (shape = aacp__need(c, obs, "shape", "observation.shape")) < 0)
+        (size = aacp__need(c, obs, "size", "observation.size")) < 0 ||
+        (shape = aacp__need(c, obs, "shape", "observation.shape")) < 0)
         return AACP_ERR_HEADER;
     product = aacp__shape_product(j, shape, 1);
     if (!aacp__whole(j, size, 1, &s->d) || product != s->d)
-        return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "observation size %s and shape disagree", aacp__show(j, size, b1, sizeof b1));
+        return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "observation size %s and shape disagree",
+                         aacp__show(j, size, b1, sizeof b1));
     if ((code = aacp__check_action(c, s, action)) != AACP_OK)
         return code;
     if ((features = aacp__need(c, approx, "features", "approximators.features")) < 0 ||
@@ -1155,7 +1167,8 @@ static int aacp__check_header(aacp__ctx *c, aacp__spec *s) {
         return AACP_ERR_HEADER;
     if (s->a != aacp__add(aacp__add(s->k, s->n_params), 1) || !aacp__outputs_ok(j, outputs, s->k, s->n_params))
         return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
-                         "approximator outputs (n_outputs=%lld); expected {'q': [0, %lld], 'params': [%lld, %lld], 'value': %lld}",
+                         "approximator outputs (n_outputs=%lld); "
+                         "expected {'q': [0, %lld], 'params': [%lld, %lld], 'value': %lld}",
                          (long long)s->a, (long long)s->k, (long long)s->k, (long long)(s->k + s->n_params),
                          (long long)(s->k + s->n_params));
     if ((s->arrays = aacp__need(c, 0, "arrays", "arrays")) < 0 || (blob = aacp__need(c, 0, "blob_size", "blob_size")) < 0)
@@ -1200,16 +1213,17 @@ static int aacp__check_placements(aacp__ctx *c, aacp__spec *s) {
             else if (a->ndim == 2)
                 snprintf(want, sizeof want, "(%lld, %lld)", (long long)a->shape[0], (long long)a->shape[1]);
             else
-                snprintf(want, sizeof want, "(%lld, %lld, %lld)", (long long)a->shape[0], (long long)a->shape[1], (long long)a->shape[2]);
-            return aacp__bad(c->error, c->name, AACP_ERR_ARRAY, "array '%s' has another shape than the header's sizes need, %s",
-                             a->name, want);
+                snprintf(want, sizeof want, "(%lld, %lld, %lld)", (long long)a->shape[0], (long long)a->shape[1],
+                         (long long)a->shape[2]);
+            return aacp__bad(c->error, c->name, AACP_ERR_ARRAY,
+                             "array '%s' has another shape than the header's sizes need, %s", a->name, want);
         }
         for (axis = 0; axis < a->ndim; axis++)
             size = aacp__mul(size, a->shape[axis]);
         if (!aacp__whole(j, offset, 0, &off) || off % AACP__ALIGN != 0 || aacp__add(off, size) > s->blob_size ||
             !aacp__whole(j, nbytes, 0, &bytes) || bytes != size)
-            return aacp__bad(c->error, c->name, AACP_ERR_ARRAY, "array '%s': offset / nbytes do not fit the %lld-byte blob", a->name,
-                             (long long)s->blob_size);
+            return aacp__bad(c->error, c->name, AACP_ERR_ARRAY, "array '%s': offset / nbytes do not fit the %lld-byte blob",
+                             a->name, (long long)s->blob_size);
         a->offset = off;
     }
     return AACP_OK;
@@ -1260,7 +1274,8 @@ void aacp_free(aacp_policy *p) {
         return;
     free(p->offsets), free(p->feature_a), free(p->feature_b), free(p->w), free(p->b), free(p->w2), free(p->b2);
     free(p->param_low), free(p->param_high), free(p->tile_inputs), free(p->tile_a), free(p->tile_b), free(p->tile_limit);
-    free(p->tile_strides), free(p->tile_bases), free(p->tile_weight), free(p->phi), free(p->active), free(p->outputs), free(p->params);
+    free(p->tile_strides), free(p->tile_bases), free(p->tile_weight), free(p->phi), free(p->active), free(p->outputs);
+    free(p->params);
     if (p->layers) {
         size_t l;
         for (l = 0; l < p->n_layers; l++)
@@ -1330,8 +1345,8 @@ static int aacp__check_values(aacp__ctx *c, const aacp__spec *s, const unsigned 
         for (i = 0; i < count; i++) {
             double v = aacp__f64(blob + a->offset + 8 * i);
             if (bounds ? v != v : !isfinite(v))
-                return aacp__bad(c->error, c->name, AACP_ERR_VALUE, bounds ? "array '%s' holds NaN" : "array '%s' holds NaN or inf values",
-                                 a->name);
+                return aacp__bad(c->error, c->name, AACP_ERR_VALUE,
+                                 bounds ? "array '%s' holds NaN" : "array '%s' holds NaN or inf values", a->name);
         }
     }
     if (!aacp__all_positive(s, blob, "obs_half"))
@@ -1366,7 +1381,8 @@ static int aacp__check_values(aacp__ctx *c, const aacp__spec *s, const unsigned 
         for (cc = 0; cc < (size_t)s->c; cc++) { /* numpy: bases + (resolution * strides).sum(1), in float64 */
             double reach = 0;
             for (jj = 0; jj < (size_t)s->g; jj++)
-                reach += aacp__f64(blob + res->offset + 8 * (cc * s->g + jj)) * aacp__f64(blob + stride->offset + 8 * (cc * s->g + jj));
+                reach += aacp__f64(blob + res->offset + 8 * (cc * s->g + jj)) *
+                         aacp__f64(blob + stride->offset + 8 * (cc * s->g + jj));
             reach = aacp__f64(blob + base->offset + 8 * cc) + reach;
             if (reach > most)
                 most = reach;
@@ -1404,7 +1420,8 @@ static int aacp__build_networks(const aacp__spec *s, const unsigned char *blob, 
         for (l = 0; l < net->count; l++) {
             const aacp__layer_spec *spec = &s->layers[net->first + l];
             aacp__layer *layer = &p->layers[net->first + l];
-            layer->kind = spec->kind, layer->in = (size_t)spec->in, layer->out = (size_t)spec->out, layer->constant = spec->constant;
+            layer->kind = spec->kind, layer->constant = spec->constant;
+            layer->in = (size_t)spec->in, layer->out = (size_t)spec->out;
             if (layer->out > p->width)
                 p->width = layer->out;
             if (spec->kind == AACP__LAYER_LINEAR || (spec->kind == AACP__LAYER_NORM && spec->affine)) {
@@ -1554,7 +1571,7 @@ static int aacp__load(const unsigned char *data, size_t size, const char *name, 
     aacp__sha256(data, size - AACP__DIGEST, digest);
     if (memcmp(digest, data + size - AACP__DIGEST, AACP__DIGEST) != 0)
         return aacp__bad(error, name, AACP_ERR_CHECKSUM,
-                         "SHA-256 checksum mismatch: the file is truncated, corrupted or was altered; export it again");
+                         AACP__CHECKSUM_MISMATCH);
     if (aacp__json_parse(&j, data + AACP__PREAMBLE, (size_t)header_len) != 0) {
         code = j.nomem ? AACP_ERR_MEMORY : AACP_ERR_JSON;
         aacp__bad(error, name, code, "the header is not UTF-8 JSON (%s)", j.why);
@@ -1642,7 +1659,8 @@ static int aacp__load_stream(FILE *f, const char *path, aacp_policy **policy, aa
     memset(&s, 0, sizeof s);
     c.j = &j, c.error = error, c.name = path;
     if (aacp__json_parse(&j, buf + AACP__PREAMBLE, (size_t)header_len) != 0)
-        header_code = aacp__bad(error, path, j.nomem ? AACP_ERR_MEMORY : AACP_ERR_JSON, "the header is not UTF-8 JSON (%s)", j.why);
+        header_code = aacp__bad(error, path, j.nomem ? AACP_ERR_MEMORY : AACP_ERR_JSON, "the header is not UTF-8 JSON (%s)",
+                                j.why);
     else
         header_code = aacp__check_header(&c, &s);
     aacp__json_free(&j);
@@ -1667,7 +1685,7 @@ static int aacp__load_stream(FILE *f, const char *path, aacp_policy **policy, aa
             aacp__sha256(buf, len - AACP__DIGEST, digest);
             if (memcmp(digest, buf + len - AACP__DIGEST, AACP__DIGEST) != 0) {
                 code = aacp__bad(error, path, AACP_ERR_CHECKSUM,
-                                 "SHA-256 checksum mismatch: the file is truncated, corrupted or was altered; export it again");
+                                 AACP__CHECKSUM_MISMATCH);
                 goto done;
             }
         }
@@ -1679,7 +1697,8 @@ static int aacp__load_stream(FILE *f, const char *path, aacp_policy **policy, aa
     if ((code = aacp__read(f, &buf, &len, (size_t)s.blob_size + AACP__DIGEST, path, error)) != AACP_OK)
         goto done;
     if (len < header_end + (size_t)s.blob_size + AACP__DIGEST) {
-        code = aacp__bad(error, path, AACP_ERR_TRUNCATED, "it ends inside the arrays and checksum (%lu of %llu bytes; truncated?)",
+        code = aacp__bad(error, path, AACP_ERR_TRUNCATED,
+                         "it ends inside the arrays and checksum (%lu of %llu bytes; truncated?)",
                          (unsigned long)(len - header_end), (unsigned long long)(s.blob_size + AACP__DIGEST));
         goto done;
     }
