@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 from sb3_aac import RuntimePolicy, export_policy
 from sb3_aac.export import encode_policy_file
-from sb3_aac.runtime import MAGIC, PREAMBLE, read_policy_file
+from sb3_aac.runtime.format import MAGIC, PREAMBLE, read_policy_file
 from sb3_aac.runtime.c import header_path
 from tests.helpers import LAYOUTS, POLICIES
 from tests.test_export import header_only_file, observations, randomised_model, rewrite
@@ -94,7 +94,7 @@ def policy_kinds() -> dict[str, tuple[str, str, dict]]:
             else:
                 kwargs = {"n_rbf": 7 if policy != "MlpPolicy" else None, "hidden_units": None if policy == "RbfPolicy" else 4}
             kinds[f"{policy}-{layout}"] = (policy, layout, kwargs)
-    # 50 RBFs per input: the window keeps about 11 of them; version 1: the same weights, dense
+    # 50 RBFs per input: the window keeps about 11 of them
     kinds["RbfPolicy-window"] = ("RbfPolicy", "nested", {"n_rbf": 50})
     kinds["RbfMlpPolicy-window"] = ("RbfMlpPolicy", "flat", {"n_rbf": 30, "hidden_units": 3})
     return kinds
@@ -110,18 +110,10 @@ def policy_files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Pa
     for name, (policy, layout, kwargs) in KINDS.items():
         model = randomised_model(policy, layout, **kwargs)
         files[name] = (export_policy(model, folder / name), observations(model, N_OBS))
-    path, obs = files["RbfPolicy-window"]
-
-    def version_1(header: dict) -> None:
-        header["version"] = 1
-        del header["approximators"]["features"]["rbf_window"]
-
-    (folder / "version-1.aacp").write_bytes(rewrite(path, version_1))
-    files["RbfPolicy-version-1"] = (folder / "version-1.aacp", obs)
     return files
 
 
-@pytest.mark.parametrize("name", [*KINDS, "RbfPolicy-version-1"])
+@pytest.mark.parametrize("name", list(KINDS))
 def test_same_decisions_as_runtime_policy(name: str, policy_files, drivers, tmp_path: Path) -> None:
     """On 10,000 observations (20% outside the bounds): the same action types as RuntimePolicy.act, and parameters
     within 1e-5 of act()'s (cast to their Box dtype, float32) and within 1e-9 of the float64 batch values; both
@@ -277,8 +269,9 @@ def explicit_cases(good: Path, tiles: Path) -> list[tuple[str, bytes, str | None
 
     edit("version 4", set_in("version", value=4), "unknown format version 4")
     edit("format other", set_in("format", value="other"), "format")
-    edit("version 1.0", set_in("version", value=1.0), None)  # Python: 1.0 in (1, 2)
-    edit("version true", set_in("version", value=True), None)  # Python: True == 1
+    edit("version 1", set_in("version", value=1), "unknown format version 1")
+    edit("version 2.0", set_in("version", value=2.0), None)  # Python: 2.0 == 2
+    edit("version true", set_in("version", value=True), "unknown format version")
     edit("version '2'", set_in("version", value="2"), "version")
     edit("no weight2", None, "missing array 'weight2'", lambda a: a.pop("weight2"))
     edit("bias2 shape", None, "shape", lambda a: a.update(bias2=np.zeros(2)))

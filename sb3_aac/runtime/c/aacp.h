@@ -3,7 +3,7 @@
  *
  * One C99 header with no dependency beyond the C standard library (and libm: link with -lm). It reads
  * every file the Python reference reader (`sb3_aac.runtime.RuntimePolicy`) reads: format `sb3-aac-policy`
- * versions 1 to 3, scaled-input or Gaussian-RBF features (with or without the RBF window) under a linear or
+ * versions 2 and 3, scaled-input or Gaussian-RBF features (with or without the RBF window) under a linear or
  * one-tanh-layer head, tile coding, and (version 3) the feed-forward networks of a DeepPolicy (linear, layer-norm
  * and tanh/relu/leaky-relu layers). It checks a file as that reader does (length, magic bytes, SHA-256,
  * strict UTF-8 JSON header, format and version, every field and array, finite values) and never reads past
@@ -853,8 +853,10 @@ static int aacp__check_features_and_head(aacp__ctx *c, aacp__spec *s, long featu
         if (!aacp__whole(j, n_rbf, 1, &s->m) || s->f != aacp__mul(s->d, s->m))
             return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "RBF features: n_rbf=%s, n_features=%lld, %lld inputs",
                              aacp__show(j, n_rbf, b1, sizeof b1), (long long)s->f, (long long)s->d);
-        window = aacp__member(j, features, "rbf_window"); /* version 1 has none: dense */
-        if (window >= 0 && !aacp__is(j, window, AACP__NULL)) {
+        window = aacp__need(c, features, "rbf_window", "approximators.features.rbf_window"); /* null: dense */
+        if (window < 0)
+            return AACP_ERR_HEADER;
+        if (!aacp__is(j, window, AACP__NULL)) {
             double r = aacp__is(j, window, AACP__INT) ? (j->nodes[window].big ? INFINITY : (double)j->nodes[window].i)
                                                        : j->nodes[window].d;
             if (!(aacp__is(j, window, AACP__INT) || aacp__is(j, window, AACP__FLOAT)) || !(r > 0 && r < INFINITY))
@@ -1134,9 +1136,9 @@ static int aacp__check_header(aacp__ctx *c, aacp__spec *s) {
     if (!aacp__string_is(j, format, AACP_FORMAT_NAME))
         return aacp__bad(c->error, c->name, AACP_ERR_FORMAT, "format is %s, expected '%s'",
                          aacp__show(j, format, b1, sizeof b1), AACP_FORMAT_NAME);
-    if (!aacp__equals(j, version, 1) && !aacp__equals(j, version, 2) && !aacp__equals(j, version, 3))
+    if (!aacp__equals(j, version, 2) && !aacp__equals(j, version, 3))
         return aacp__bad(c->error, c->name, AACP_ERR_FORMAT,
-                         "unknown format version %s; this reader supports [1, 2, 3] "
+                         "unknown format version %s; this reader supports [2, 3] "
                          "(a newer sb3-aac wrote it? use a newer aacp.h)",
                          aacp__show(j, version, b1, sizeof b1));
     s->version3 = aacp__equals(j, version, 3); /* a networks head needs version >= 3 */
@@ -1201,7 +1203,7 @@ static int aacp__check_placements(aacp__ctx *c, aacp__spec *s) {
             return aacp__bad(c->error, c->name, AACP_ERR_ARRAY, "array '%s': malformed entry", a->name);
         if (!aacp__string_is(j, dtype, "<f8"))
             return aacp__bad(c->error, c->name, AACP_ERR_ARRAY,
-                             "array '%s' has dtype other than '<f8'; versions 1 and 2 store every array as '<f8'", a->name);
+                             "array '%s' has dtype other than '<f8'; every array is stored as '<f8'", a->name);
         shape_ok = aacp__is(j, shape, AACP__ARRAY) && (int)j->nodes[shape].count == a->ndim;
         for (e = shape_ok ? j->nodes[shape].child : -1; e >= 0; e = j->nodes[e].next, axis++)
             if (!aacp__whole(j, e, 0, &dim) || dim != a->shape[axis])
