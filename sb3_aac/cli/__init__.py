@@ -22,6 +22,7 @@ from sb3_aac.cli.envs import PROFILE_ENV_IDS, register_toy_env
 from sb3_aac.cli.evaluate import add_evaluate_commands
 from sb3_aac.cli.export import add_export_command
 from sb3_aac.cli.models import hyperparameters
+from sb3_aac.cli.pitch import add_pitch_command
 from sb3_aac.cli.render import add_render_command
 from sb3_aac.cli.train import add_train_command
 from sb3_aac.cli.tune import add_tune_command
@@ -37,6 +38,7 @@ examples:
   sb3-aac reliability runs/rbf/model.zip --out runs/rbf/reliability.png
   sb3-aac render runs/rbf/model.zip --out runs/rbf/episode.gif
   sb3-aac export runs/rbf/model.zip runs/rbf/dribbler.aacp
+  sb3-aac pitch runs/tile/model.zip --server PATH/rcssserver --episodes 1000   # a real rcssserver 19 against the env
   sb3-aac bench
 
 MODEL is a SarsaAAC model saved by train (model.zip), a policy exported by export (.aacp), or the word
@@ -82,6 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_evaluate_commands(add, played)
     add_render_command(add, played)
     add_export_command(add)
+    add_pitch_command(add, played)
     add_bench_command(add)
     add_tune_command(add)
     return parser

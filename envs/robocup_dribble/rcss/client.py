@@ -20,7 +20,7 @@ today, so :func:`checked_profile` refuses ``"v11"`` with that reason.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -34,7 +34,6 @@ from robocup_dribble.player_types import TYPE_FIELDS, generate_player_types, sta
 from robocup_dribble.rcss import protocol
 from robocup_dribble.rcss.protocol import ProtocolError
 from robocup_dribble.rcss.server import Endpoint, ServerError
-from robocup_dribble.task import DribbleTask
 from robocup_dribble.vec_env import parse_actions
 
 PROTOCOL_VERSION = 19
@@ -66,7 +65,8 @@ def checked_profile(profile: str | ServerProfile) -> ServerProfile:
 def server_options(profile: ServerProfile, world_seed: int) -> dict[str, object]:
     """The rcssserver options of a session: synchronous trainer mode without referee or logs, fullstate for the
     left team, ``player::random_seed = world_seed`` and the profile's noise."""
-    if isinstance(world_seed, bool) or not isinstance(world_seed, (int, np.integer)) or not 0 <= world_seed < 2**31:
+    integer = isinstance(world_seed, (int, np.integer)) and not isinstance(world_seed, bool)  # type: ignore[redundant-expr]
+    if not integer or not 0 <= world_seed < 2**31:
         raise ValueError(f"world_seed must be an integer in 0 .. 2**31 - 1 (player::random_seed), got {world_seed!r}")
     s = profile.server
     return {
@@ -103,28 +103,33 @@ def server_episodes(
 ) -> ServerEpisodes:
     """``n_episodes`` episodes of the world ``world_seed``: each plays a type drawn uniformly from the server's
     ``player_types`` (type 0 included, as the env's type sets) from a start drawn by the env's start rule
-    (:func:`robocup_dribble.task.start_lane`), all from ``numpy.random.default_rng((seed, world_seed))``.
+    (:func:`robocup_dribble.task.start_lane`), all from ``numpy.random.default_rng((seed, world_seed))``: per
+    episode one integer for the type, then six uniforms for the start, so the first ``m`` episodes of a longer run
+    are the ``m`` episodes of a shorter one.
 
     :param env_kwargs: ``noise`` and the :class:`DribbleTask` settings, as for the env.
     """
-    if isinstance(n_episodes, bool) or not isinstance(n_episodes, (int, np.integer)) or n_episodes < 1:
+    if isinstance(n_episodes, bool) or not isinstance(n_episodes, (int, np.integer)) or n_episodes < 1:  # type: ignore[redundant-expr]
         raise ValueError(f"n_episodes must be an integer >= 1, got {n_episodes!r}")
     server_profile, task_settings = configure(profile, env_kwargs.pop("noise", True), None, env_kwargs)
     table = stack_player_types(generate_player_types(server_profile, int(world_seed)))
     rng = np.random.default_rng((int(seed), int(world_seed)))
-    type_ids = rng.integers(0, len(table), size=int(n_episodes))
-    uniforms = rng.random((int(n_episodes), 6))
-    types = table[type_ids]
+    type_ids = np.empty(int(n_episodes), dtype=np.int64)
     states = physics.new_state(int(n_episodes))
     c, k = task_settings.constants(), physics.profile_constants(server_profile)
-    for j in range(int(n_episodes)):
-        task.start_lane(states, j, types, j, uniforms[j], np.zeros(1, dtype=np.int64), c, k)
-    return ServerEpisodes(int(world_seed), type_ids.astype(np.int64), types, states)
+    for j in range(int(n_episodes)):  # episode j's draws follow episode j - 1's: a longer run starts the same
+        type_ids[j] = rng.integers(0, len(table))
+        task.start_lane(states, j, table[type_ids[j : j + 1]], 0, rng.random(6), np.zeros(1, dtype=np.int64), c, k)
+    types = table[type_ids]
+    return ServerEpisodes(int(world_seed), type_ids, types, states)
 
 
 def check_server(
-    profile: ServerProfile, world_seed: int, server_param: Mapping[str, Any], player_param: Mapping[str, Any],
-    player_types: list[Mapping[str, Any]],
+    profile: ServerProfile,
+    world_seed: int,
+    server_param: Mapping[str, Any],
+    player_param: Mapping[str, Any],
+    player_types: Sequence[Mapping[str, Any]],
 ) -> None:
     """Check a server's parameter messages against ``profile`` and the types it should have generated.
 
@@ -150,9 +155,7 @@ def check_server(
                 problems.append(f"player type {type_id}: {name} is {message.get(name)!r}, expected {value:.6g}")
     if problems:
         shown = "; ".join(problems[:5]) + (f"; and {len(problems) - 5} more" if len(problems) > 5 else "")
-        raise ServerError(
-            f"the server does not match profile {profile.name!r} with player::random_seed={world_seed}: {shown}"
-        )
+        raise ServerError(f"the server does not match profile {profile.name!r} with player::random_seed={world_seed}: {shown}")
 
 
 def _close(given: Any, expected: float) -> bool:
@@ -249,17 +252,17 @@ class ServerSession:
         self._place(type_id, start)
         state = start.reshape(1, physics.STATE_SIZE).copy()
         types = np.asarray(player_type, dtype=np.float64).reshape(1, physics.TYPE_SIZE)
-        obs = np.empty((1, task.N_OBSERVATIONS), dtype=np.float32)
         command = np.empty(physics.COMMAND_SIZE)
         start_x, distance, ball_lost = float(state[0, physics.P_X]), 0.0, False
         for _ in range(self.task.max_actions):
-            task.observe(state, 0, types, 0, self._obs_low, self._obs_high, obs, 0)
-            actions, _ = policy.predict(obs, deterministic=deterministic)
+            actions, _ = policy.predict(self.observe(state[0], types[0]), deterministic=deterministic)
             kinds, params = parse_actions(actions)
             clipped = np.clip(params[0], self._param_low, self._param_high)
             skills.command_lane(state[0], types[0], int(kinds[0]), clipped, self._k, command)
             previous_x = float(state[0, physics.P_X])
-            self.player.send(protocol.player_command(int(command[physics.C_KIND]), command[physics.C_POWER], command[physics.C_DIRECTION]))
+            self.player.send(
+                protocol.player_command(int(command[physics.C_KIND]), command[physics.C_POWER], command[physics.C_DIRECTION])
+            )
             fullstate, collided = self._finish_cycle()
             if fullstate.player_type != type_id:
                 raise ServerError(f"the server reports player type {fullstate.player_type}, the episode set {type_id}")
@@ -270,6 +273,14 @@ class ServerSession:
             distance = float(state[0, physics.P_X]) - start_x
         return distance, bool(ball_lost)
 
+    def observe(self, state: np.ndarray, player_type: np.ndarray) -> np.ndarray:
+        """The env's observation ``(1, 10)`` of a state ``(STATE_SIZE,)`` for a player type ``(TYPE_SIZE,)``."""
+        obs = np.empty((1, task.N_OBSERVATIONS), dtype=np.float32)
+        states = np.asarray(state, dtype=np.float64).reshape(1, physics.STATE_SIZE)
+        types = np.asarray(player_type, dtype=np.float64).reshape(1, physics.TYPE_SIZE)
+        task.observe(states, 0, types, 0, self._obs_low, self._obs_high, obs, 0)
+        return obs
+
     def _place(self, type_id: int, start: np.ndarray) -> None:
         """Set the episode up in the current think window: type, recovery, ball parked, player and ball placed."""
         if type_id != self.player_type:
@@ -277,13 +288,18 @@ class ServerSession:
             self.player_type = type_id
         self._trainer_command("(recover)")
         self._trainer_command(protocol.move_ball(*PARK_BALL))
-        p, b = start[[physics.P_X, physics.P_Y, physics.P_VX, physics.P_VY]], start[[physics.B_X, physics.B_Y, physics.B_VX, physics.B_VY]]
+        p, b = (
+            start[[physics.P_X, physics.P_Y, physics.P_VX, physics.P_VY]],
+            start[[physics.B_X, physics.B_Y, physics.B_VX, physics.B_VY]],
+        )
         self._trainer_command(protocol.move_player(TEAM, UNUM, p[0], p[1], math.degrees(start[physics.P_BODY]), p[2], p[3]))
         self._trainer_command(protocol.move_ball(*b))
         placed = protocol.read_look(self._trainer_command("(look)"), TEAM, UNUM)
         expected = np.concatenate((p, b))
         if not np.allclose(placed, expected, rtol=PRINT_RTOL, atol=1e-5):
-            raise ServerError(f"the trainer's look shows player and ball at {placed.tolist()}, they were placed at {expected.tolist()}")
+            raise ServerError(
+                f"the trainer's look shows player and ball at {placed.tolist()}, they were placed at {expected.tolist()}"
+            )
 
     def _trainer_command(self, command: str) -> str:
         """Send a trainer command and return its ``(ok ...)`` answer."""

@@ -12,7 +12,6 @@ from robocup_dribble.env import configure
 from robocup_dribble.evaluation import DribbleReport
 from robocup_dribble.params import ServerProfile
 from robocup_dribble.rcss.client import ServerEpisodes, ServerSession, checked_profile, server_options
-from robocup_dribble.task import observation_space
 from robocup_dribble.rcss.server import DEFAULT_TIMEOUT, Endpoint, Log, ServerError, ServerPorts, ServerProcess, connect
 
 SERVER_VARIABLE = "RCSSSERVER"
@@ -55,10 +54,7 @@ def play_on_server(
     if (server is None) == (address is None):
         raise ValueError("give either server (a binary to start) or address (host and ports of a running server)")
     checked = checked_profile(profile)
-    task_kwargs = {key: value for key, value in env_kwargs.items() if key != "noise"}
-    session_profile, task_settings = configure(checked, env_kwargs.get("noise", True), None, task_kwargs)
-    # a first call that compiles must not keep the waiting server past its 1.25 s
-    policy.predict(observation_space(session_profile, task_settings).sample()[None], deterministic=deterministic)
+    session_profile, _ = configure(checked, env_kwargs.get("noise", True), None, {})
     if address is not None:
         player, trainer = connect(address[0], address[1], timeout, transcript)
         return _play(player, trainer, policy, episodes, checked, on_episode, deterministic, env_kwargs)
@@ -86,6 +82,8 @@ def _play(
 ) -> DribbleReport:
     try:
         session = ServerSession(player, trainer, profile, episodes.world_seed, **env_kwargs)
+        # a first call that compiles must not keep the waiting server past its 1.25 s
+        policy.predict(session.observe(episodes.start_states[0], episodes.player_types[0]), deterministic=deterministic)
         session.open()
         return session.play(policy, episodes, deterministic, on_episode)
     finally:

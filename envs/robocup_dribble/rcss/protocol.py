@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Union
+from typing import TypeAlias
 
 import numpy as np
 
 from robocup_dribble import physics
 
-Expression = Union[str, list["Expression"]]
+Expression: TypeAlias = "str | list[Expression]"
 
 
 class ProtocolError(ValueError):
@@ -192,7 +192,9 @@ def player_command(command_kind: int, power: float, direction: float) -> str:
         return f"(dash {number(power)} {number(direction)})"
     if command_kind == physics.CMD_KICK:
         return f"(kick {number(power)} {number(direction)})"
-    raise ValueError(f"the skills give dash or kick commands (kinds {physics.CMD_DASH}, {physics.CMD_KICK}), got {command_kind!r}")
+    raise ValueError(
+        f"the skills give dash or kick commands (kinds {physics.CMD_DASH}, {physics.CMD_KICK}), got {command_kind!r}"
+    )
 
 
 def move_player(team: str, unum: int, x: float, y: float, body_deg: float, vx: float, vy: float) -> str:

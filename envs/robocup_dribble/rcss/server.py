@@ -176,9 +176,7 @@ class ServerProcess:
             raise
         return self
 
-    def __exit__(
-        self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
-    ) -> None:
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None) -> None:
         self.stop()
 
     @property
@@ -281,9 +279,25 @@ class ServerProcess:
             raise ServerError(report["error"])
         self._sockets = [socket.socket(fileno=fd) for fd in fds]
         self.ports = ServerPorts(*report["ports"])
-        # the server prints its banner and binds at once; one that exits right away has bad options or is no rcssserver
-        time.sleep(0.2)
-        self.check_running()
+        self._wait_until_listening()
+
+    def _wait_until_listening(self) -> None:
+        """Wait until the server has bound its player and trainer ports (a message sent before would be lost),
+        reading its namespace's UDP table in ``/proc/PID/net/udp``.
+
+        :raises ServerError: if it exits first (bad options, not an rcssserver) or takes longer than the timeout.
+        """
+        wanted = {self.ports.player, self.ports.trainer}
+        deadline = time.monotonic() + self.timeout
+        while True:
+            self.check_running()
+            if wanted <= _bound_udp_ports(self.pid):
+                return
+            if time.monotonic() > deadline:
+                raise ServerError(
+                    f"rcssserver did not open its ports within {self.timeout:g} s; its output ended with: {self.output_tail()}"
+                )
+            time.sleep(0.02)
 
 
 _PLACED_OPTIONS = (
@@ -304,10 +318,15 @@ def _child(channel: socket.socket, log_fd: int, binary: str, options: Mapping[st
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
         _enter_private_network(libc)
-        ports = _free_ports(3)
+        probes = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(3)]
+        for probe in probes:  # free ports, held until the client's sockets are bound (so those get others)
+            probe.bind(("0.0.0.0", 0))
+        ports = [probe.getsockname()[1] for probe in probes]
         client_sockets = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(2)]
         for sock in client_sockets:
             sock.bind(("127.0.0.1", 0))
+        for probe in probes:
+            probe.close()
         placed = dict(zip(_PLACED_OPTIONS[:3], ports, strict=True))
         for name in ("server::text_log_dir", "server::game_log_dir", "server::keepaway_log_dir"):
             placed[name] = str(folder)
@@ -322,7 +341,7 @@ def _child(channel: socket.socket, log_fd: int, binary: str, options: Mapping[st
         os.chdir(folder)
         environment = {"HOME": str(folder), "PATH": os.environ.get("PATH", "/usr/bin:/bin")}
         os.execve(binary, arguments, environment)
-    except BaseException as error:  # noqa: BLE001  (the child must report and exit, whatever happened)
+    except BaseException as error:
         with contextlib.suppress(BaseException):
             channel.send(json.dumps({"error": f"{error}"}).encode())
     finally:
@@ -359,16 +378,14 @@ def _enter_private_network(libc: ctypes.CDLL) -> None:
         raise OSError(errno.EPERM, f"the private network namespace holds {interfaces}, not only lo; refusing to start")
 
 
-def _free_ports(count: int) -> list[int]:
-    """``count`` distinct UDP ports that are free now (bound with port 0 together, then released)."""
-    socks = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(count)]
-    try:
-        for sock in socks:
-            sock.bind(("0.0.0.0", 0))
-        return [sock.getsockname()[1] for sock in socks]
-    finally:
-        for sock in socks:
-            sock.close()
+def _bound_udp_ports(pid: int) -> set[int]:
+    """The local UDP ports bound in the network namespace of process ``pid`` (``/proc/PID/net/udp``, ``udp6``)."""
+    ports = set()
+    for table in ("udp", "udp6"):
+        with contextlib.suppress(OSError):
+            for line in Path(f"/proc/{pid}/net/{table}").read_text().splitlines()[1:]:
+                ports.add(int(line.split()[1].rsplit(":", 1)[1], 16))
+    return ports
 
 
 def _option_text(value: object) -> str:
