@@ -38,7 +38,7 @@ from robocup_dribble.rcss import (
     play_on_server,
     server_episodes,
 )
-from robocup_dribble.rcss import protocol
+from robocup_dribble.rcss import perception, protocol
 from robocup_dribble.rcss.server import Endpoint
 
 SESSION = Path(robocup_dribble.__file__).parent / "data" / "rcss" / "session-v19.jsonl"
@@ -460,3 +460,73 @@ def test_the_real_server_and_the_env_agree_within_half_a_metre() -> None:
     assert abs(real.mean_distance - sim.mean_distance) < 0.5
     np.testing.assert_array_equal(real.player_types, sim.player_types)
     assert real.loss_rate < 0.1 and real.mean_distance > 20
+
+
+# --- the player's own perception ----------------------------------------------------------------------------------------
+
+
+def test_seen_ball_and_speed_readers_on_the_recorded_session() -> None:
+    sees = received("see")
+    balls = [perception.read_seen_ball(text) for text in sees]
+    in_cone = [b for b in balls if b is not None and b.distance_change is not None]
+    felt = [b for b in balls if b is not None and b.distance_change is None]
+    assert in_cone and felt  # both forms occur: ((b) d dir dchg dirchg) and ((B) d dir)
+    assert all(0 < b.distance < 2 and -180 <= b.direction <= 180 for b in in_cone + felt)
+    assert all(abs(b.direction) <= 60 < abs(f.direction) for b in in_cone for f in felt)  # the cone: 120 degrees
+    first = sees[0]
+    assert perception.read_seen_ball(first[: first.index("((b)")] + ")") is None if "((b)" in first else True
+    amount, direction, head = perception.read_speed(received("sense_body")[10])
+    assert 0 <= amount < 1.2 and -180 <= direction <= 180 and head == 0
+    with pytest.raises(ProtocolError):
+        perception.read_seen_ball(received("sense_body")[0])
+    with pytest.raises(ProtocolError):
+        perception.read_speed(received("see")[0])
+
+
+def _true_perception(state: np.ndarray) -> tuple[tuple[float, float, float], perception.SeenBall]:
+    """The sense_body speed and the seen ball of ``state`` without quantisation or noise (the server's formulas)."""
+    body = state[physics.P_BODY]
+    speed = math.hypot(state[physics.P_VX], state[physics.P_VY])
+    speed_dir = math.degrees(math.atan2(state[physics.P_VY], state[physics.P_VX]) - body)
+    rx, ry = state[physics.B_X] - state[physics.P_X], state[physics.B_Y] - state[physics.P_Y]
+    vx, vy = state[physics.B_VX] - state[physics.P_VX], state[physics.B_VY] - state[physics.P_VY]
+    distance = math.hypot(rx, ry)
+    ex, ey = rx / distance, ry / distance
+    seen = perception.SeenBall(
+        distance, math.degrees(math.atan2(ry, rx) - body), vx * ex + vy * ey, math.degrees((vy * ex - vx * ey) / distance)
+    )
+    return (speed, speed_dir, 0.0), seen
+
+
+def test_perceived_world_recovers_an_exact_perception_and_corrects_a_wrong_velocity() -> None:
+    episodes = server_episodes(1, world_seed=1, seed=3)
+    start, player_type = episodes.start_states[0], episodes.player_types[0]
+    profile = checked_profile("v19")
+    command = np.array([physics.CMD_DASH, 100.0, 10.0])
+    truth = start.reshape(1, -1).copy()
+    constants = physics.profile_constants(robocup_dribble.params.without_noise(profile))
+    physics.step(truth, player_type.reshape(1, -1), command.reshape(1, -1), np.full((1, physics.N_UNIFORMS), 0.5), constants)
+    world = perception.PerceivedWorld(profile)
+    world.start(start)
+    speed, seen = _true_perception(truth[0])
+    np.testing.assert_allclose(world.update(player_type, command, truth[0, physics.P_BODY], speed, seen), truth[0], atol=1e-9)
+
+    wrong = start.copy()
+    wrong[physics.B_VX] += 0.2  # a velocity the prediction gets wrong; the see has no velocity (ball out of the cone)
+    world.start(wrong)
+    speed, seen = _true_perception(truth[0])
+    felt = perception.SeenBall(seen.distance, seen.direction, None, None)
+    estimate = world.update(player_type, command, truth[0, physics.P_BODY], speed, felt)
+    np.testing.assert_allclose(estimate, truth[0], atol=1e-9)  # one unseen cycle: the position error is the velocity's
+    world.start(start)
+    unseen = world.update(player_type, command, truth[0, physics.P_BODY], speed, None)
+    np.testing.assert_allclose(unseen, truth[0], atol=1e-9)  # not seen: the noise-free prediction, exact here
+
+
+@pytest.mark.skipif(
+    REAL_SERVER is None, reason="no rcssserver binary: set RCSSSERVER or put rcssserver on PATH (docs/pitch.md)"
+)
+def test_a_policy_plays_on_its_own_perception_on_the_real_server() -> None:
+    episodes = server_episodes(20, world_seed=1, seed=2)
+    report = play_on_server(HandCodedDribbler("v19"), episodes, server=REAL_SERVER, perceive=True)
+    assert report.mean_distance > 10  # it dribbles, if worse than on the exact state (docs/pitch.md)

@@ -37,6 +37,12 @@ def add_pitch_command(add: Any, played: argparse.ArgumentParser) -> None:
     pitch.add_argument(
         "--timeout", type=positive_float, default=10.0, help="seconds to wait for the server (default: %(default)s)"
     )
+    pitch.add_argument(
+        "--perceive",
+        action="store_true",
+        help="on the server, the policy sees what a player in a match sees (its own see/sense_body, quantised and noisy) "
+        "instead of the exact state",
+    )
     pitch.add_argument("--out", help="write the per-episode results to this .csv file")
     pitch.set_defaults(func=cmd_pitch)
 
@@ -64,10 +70,14 @@ def cmd_pitch(args: argparse.Namespace) -> None:
     except ImportError:
         raise CliError("pitch needs scipy for its test (pip install scipy)") from None
     episodes = server_episodes(args.episodes, world_seed=args.world_seed, seed=args.seed, profile=profile)
+    view = "its own see/sense_body" if args.perceive else "the exact state (fullstate)"
     print(f"{args.model}: {args.episodes} episodes of world {args.world_seed} (player::random_seed), seed {args.seed}")
+    print(f"  on the server the policy acts on {view}; in the env on the exact state")
     with _progress(args.episodes) as advance:
         try:
-            real = play_on_server(policy, episodes, server=server, timeout=args.timeout, on_episode=advance)
+            real = play_on_server(
+                policy, episodes, server=server, timeout=args.timeout, on_episode=advance, perceive=args.perceive
+            )
         except (ServerError, ValueError) as error:
             raise CliError(str(error)) from None
     sim = evaluate_episodes(policy, episodes.player_types, episodes.start_states, profile=profile, seed=args.seed)

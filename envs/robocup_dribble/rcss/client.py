@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -32,6 +32,7 @@ from robocup_dribble.evaluation import DribbleReport, distance_bound
 from robocup_dribble.params import ServerProfile, make_profile
 from robocup_dribble.player_types import TYPE_FIELDS, generate_player_types, stack_player_types
 from robocup_dribble.rcss import protocol
+from robocup_dribble.rcss.perception import PerceivedWorld, read_seen_ball, read_speed
 from robocup_dribble.rcss.protocol import ProtocolError
 from robocup_dribble.rcss.server import Endpoint, ServerError
 from robocup_dribble.vec_env import parse_actions
@@ -46,6 +47,16 @@ PRINT_RTOL = 1e-5
 _PARAMETER_MESSAGES = ("server_param", "player_param", "player_type")
 _MESSAGE_NAMES = {"max_power": "maxpower", "min_power": "minpower", "max_moment": "maxmoment", "min_moment": "minmoment"}
 """The profile's parameters that ``(server_param ...)`` names differently (the server's old spellings)."""
+
+
+class Window(NamedTuple):
+    """What the player got in one think window: its fullstate, the collision flag and text of its sense_body, and
+    the text of its see (None in a cycle without one)."""
+
+    fullstate: protocol.FullState
+    collided: bool
+    sense_body: str
+    see: str | None
 
 
 def checked_profile(profile: str | ServerProfile) -> ServerProfile:
@@ -224,10 +235,13 @@ class ServerSession:
         episodes: ServerEpisodes,
         deterministic: bool = True,
         on_episode: Callable[[int, float, bool], None] | None = None,
+        perceive: bool = False,
     ) -> DribbleReport:
         """Play ``episodes`` with ``policy`` (SB3-style ``predict(obs_batch, deterministic=...)``).
 
         :param on_episode: called after each episode with ``(index, distance, ball_lost)`` (a progress bar).
+        :param perceive: the policy decides on the player's own perception (:mod:`robocup_dribble.rcss.perception`)
+            instead of the exact state.
         :raises ValueError: if the episodes belong to another world.
         :raises ServerError: if the server dies, stops answering, refuses a command or drifts out of step.
         """
@@ -237,7 +251,7 @@ class ServerSession:
         distances, lost = np.zeros(n), np.zeros(n, dtype=bool)
         for j in range(n):
             distances[j], lost[j] = self.play_episode(
-                policy, int(episodes.type_ids[j]), episodes.player_types[j], episodes.start_states[j], deterministic
+                policy, int(episodes.type_ids[j]), episodes.player_types[j], episodes.start_states[j], deterministic, perceive
             )
             if on_episode is not None:
                 on_episode(j, float(distances[j]), bool(lost[j]))
@@ -245,32 +259,49 @@ class ServerSession:
         return DribbleReport(distances, lost, episodes.player_types.copy(), episodes.start_states.copy(), bounds)
 
     def play_episode(
-        self, policy: Any, type_id: int, player_type: np.ndarray, start: np.ndarray, deterministic: bool = True
+        self,
+        policy: Any,
+        type_id: int,
+        player_type: np.ndarray,
+        start: np.ndarray,
+        deterministic: bool = True,
+        perceive: bool = False,
     ) -> tuple[float, bool]:
         """One episode from ``start`` with the server's type ``type_id`` (whose parameters are ``player_type``);
-        returns ``(distance, ball_lost)`` by the env's rules."""
+        returns ``(distance, ball_lost)`` by the env's rules on the server's state. The policy's observation and
+        the skills' commands come from that state, or with ``perceive`` from the player's estimate of it
+        (:class:`robocup_dribble.rcss.perception.PerceivedWorld`)."""
         self._place(type_id, start)
         state = start.reshape(1, physics.STATE_SIZE).copy()
+        believed = state[0].copy()  # what the policy and the skills act on
+        world = PerceivedWorld(self.profile)
+        world.start(start)
         types = np.asarray(player_type, dtype=np.float64).reshape(1, physics.TYPE_SIZE)
         command = np.empty(physics.COMMAND_SIZE)
         start_x, distance, ball_lost = float(state[0, physics.P_X]), 0.0, False
         for _ in range(self.task.max_actions):
-            actions, _ = policy.predict(self.observe(state[0], types[0]), deterministic=deterministic)
+            actions, _ = policy.predict(self.observe(believed, types[0]), deterministic=deterministic)
             kinds, params = parse_actions(actions)
             clipped = np.clip(params[0], self._param_low, self._param_high)
-            skills.command_lane(state[0], types[0], int(kinds[0]), clipped, self._k, command)
+            skills.command_lane(believed, types[0], int(kinds[0]), clipped, self._k, command)
             previous_x = float(state[0, physics.P_X])
             self.player.send(
                 protocol.player_command(int(command[physics.C_KIND]), command[physics.C_POWER], command[physics.C_DIRECTION])
             )
-            fullstate, collided = self._finish_cycle()
-            if fullstate.player_type != type_id:
-                raise ServerError(f"the server reports player type {fullstate.player_type}, the episode set {type_id}")
-            state[0] = fullstate.state
-            _, ball_lost = task.evaluate(state, 0, types, 0, collided, previous_x, self._c, self._k)
+            window = self._finish_cycle()
+            if window.fullstate.player_type != type_id:
+                raise ServerError(f"the server reports player type {window.fullstate.player_type}, the episode set {type_id}")
+            state[0] = window.fullstate.state
+            _, ball_lost = task.evaluate(state, 0, types, 0, window.collided, previous_x, self._c, self._k)
             if ball_lost:
                 break
             distance = float(state[0, physics.P_X]) - start_x
+            if perceive:
+                seen = None if window.see is None else read_seen_ball(window.see)
+                body = float(state[0, physics.P_BODY])
+                believed = world.update(types[0], command, body, read_speed(window.sense_body), seen)
+            else:
+                believed = state[0].copy()
         return distance, bool(ball_lost)
 
     def observe(self, state: np.ndarray, player_type: np.ndarray) -> np.ndarray:
@@ -327,9 +358,8 @@ class ServerSession:
             raise ServerError(f"the server answered the player with {message[:200]!r}")
         return message
 
-    def _finish_cycle(self, catch_up: bool = False) -> tuple[protocol.FullState, bool]:
-        """Send ``(done)`` for both clients and read up to both ``(think)``: the player's new fullstate and whether
-        the ball and the player collided in the cycle.
+    def _finish_cycle(self, catch_up: bool = False) -> Window:
+        """Send ``(done)`` for both clients and read up to both ``(think)``: the player's new :class:`Window`.
 
         The trainer's ``(see_global TIME ...)`` gives the cycle; the player's fullstate must be of the same cycle.
         With ``catch_up`` (only when connecting: the player's first think window was sent before the trainer
@@ -344,31 +374,34 @@ class ServerSession:
         if cycle < 0:
             raise ServerError("a think window without the trainer's see_global (is the trainer's eye on?)")
         while True:
-            fullstate, collided = self._player_window()
-            if fullstate.time == cycle:
+            window = self._player_window()
+            if window.fullstate.time == cycle:
                 break
-            if not (catch_up and fullstate.time < cycle):
+            if not (catch_up and window.fullstate.time < cycle):
                 raise ServerError(
-                    f"the player's fullstate is of cycle {fullstate.time}, the trainer's of {cycle}: out of step"
+                    f"the player's fullstate is of cycle {window.fullstate.time}, the trainer's of {cycle}: out of step"
                 )
-        if self.time >= 0 and fullstate.time != self.time + 1:
-            raise ServerError(f"the server went from cycle {self.time} to {fullstate.time}; expected one cycle per (done)")
-        self.time = fullstate.time
-        return fullstate, collided
+        if self.time >= 0 and cycle != self.time + 1:
+            raise ServerError(f"the server went from cycle {self.time} to {cycle}; expected one cycle per (done)")
+        self.time = cycle
+        return window
 
-    def _player_window(self) -> tuple[protocol.FullState, bool]:
-        """The player's messages up to the next ``(think)``: its fullstate and the collision flag of its sense_body."""
+    def _player_window(self) -> Window:
+        """The player's messages up to the next ``(think)``."""
         fullstate: protocol.FullState | None = None
-        collided: bool | None = None
+        sense_body: str | None = None
+        see: str | None = None
         while (message := self._player_message(self.player.receive())) != "(think)":
             head = protocol.kind(message)
             if head == "fullstate":
                 fullstate = protocol.read_fullstate(message, "l", UNUM)
             elif head == "sense_body":
-                collided = protocol.read_collision(message)
-        if fullstate is None or collided is None:
+                sense_body = message
+            elif head == "see":
+                see = message
+        if fullstate is None or sense_body is None:
             raise ServerError("a think window without the player's fullstate and sense_body (is fullstate_l on?)")
-        return fullstate, collided
+        return Window(fullstate, protocol.read_collision(sense_body), sense_body, see)
 
 
 __all__ = [

@@ -37,6 +37,7 @@ def play_on_server(
     transcript: Log | None = None,
     on_episode: Callable[[int, float, bool], None] | None = None,
     deterministic: bool = True,
+    perceive: bool = False,
     **env_kwargs: Any,
 ) -> DribbleReport:
     """Play ``episodes`` with ``policy`` on a real server and return the env's result type.
@@ -47,6 +48,8 @@ def play_on_server(
     :param timeout: seconds any receive waits before the server counts as silent.
     :param transcript: called with ``(client, direction, text)`` for every message (recording a session).
     :param on_episode: called with ``(index, distance, ball_lost)`` after each episode.
+    :param perceive: the policy acts on the player's own see/sense_body perception (a match's view) instead of the
+        exact state (:mod:`robocup_dribble.rcss.perception`).
     :param env_kwargs: ``noise`` and the :class:`robocup_dribble.task.DribbleTask` settings, as for the env.
     :raises ValueError: for no or both of ``server`` and ``address``, or profile v11.
     :raises ServerError: if the server cannot start, does not match the profile, dies or stops answering.
@@ -57,11 +60,11 @@ def play_on_server(
     session_profile, _ = configure(checked, env_kwargs.get("noise", True), None, {})
     if address is not None:
         player, trainer = connect(address[0], address[1], timeout, transcript)
-        return _play(player, trainer, policy, episodes, checked, on_episode, deterministic, env_kwargs)
+        return _play(player, trainer, policy, episodes, checked, on_episode, deterministic, perceive, env_kwargs)
     assert server is not None
     with ServerProcess(server, server_options(session_profile, episodes.world_seed), timeout) as process:
         player, trainer = process.endpoints(transcript)
-        report = _play(player, trainer, policy, episodes, checked, on_episode, deterministic, env_kwargs)
+        report = _play(player, trainer, policy, episodes, checked, on_episode, deterministic, perceive, env_kwargs)
         if process.missed_cycles():
             raise ServerError(
                 f"the client missed {process.missed_cycles()} cycle(s) (the server steps alone after 1.25 s without a "
@@ -78,6 +81,7 @@ def _play(
     profile: ServerProfile,
     on_episode: Callable[[int, float, bool], None] | None,
     deterministic: bool,
+    perceive: bool,
     env_kwargs: dict[str, Any],
 ) -> DribbleReport:
     try:
@@ -85,7 +89,7 @@ def _play(
         # a first call that compiles must not keep the waiting server past its 1.25 s
         policy.predict(session.observe(episodes.start_states[0], episodes.player_types[0]), deterministic=deterministic)
         session.open()
-        return session.play(policy, episodes, deterministic, on_episode)
+        return session.play(policy, episodes, deterministic, on_episode, perceive)
     finally:
         player.close()
         trainer.close()
