@@ -1,6 +1,6 @@
 """Dribbling episodes on a real rcssserver: one player plus a trainer, synchronous mode, the env's own rules.
 
-:class:`ServerSession` speaks the protocol (``../shared/ref/rcss-protocol.md`` restates the facts it relies on):
+:class:`ServerSession` speaks the protocol (docs/pitch.md describes what it relies on):
 the trainer connects on the coach port, the player on the player port; the server's ``server_param``,
 ``player_param`` and ``player_type`` messages are checked against the env's profile and the types
 :func:`robocup_dribble.player_types.generate_player_types` makes for the server's ``player::random_seed`` before

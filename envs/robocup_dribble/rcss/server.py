@@ -224,30 +224,30 @@ class ServerProcess:
             with contextlib.suppress(ProcessLookupError):
                 os.killpg(self.pid, signal.SIGTERM)
             deadline = time.monotonic() + STOP_GRACE
-            while not self._exited() and time.monotonic() < deadline:
+            while not self._exited():
+                if time.monotonic() > deadline:
+                    with contextlib.suppress(ProcessLookupError):
+                        os.killpg(self.pid, signal.SIGKILL)
                 time.sleep(0.02)
-            if not self._exited():
-                with contextlib.suppress(ProcessLookupError):
-                    os.killpg(self.pid, signal.SIGKILL)
-                os.waitpid(self.pid, 0)
-                self._status = -signal.SIGKILL
-        if self.pid:  # anything the server started in its group goes with it
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.killpg(self.pid, signal.SIGKILL)
         if self._temporary is not None:
             self._temporary.cleanup()
             self._temporary = None
 
     def _exited(self) -> bool:
+        """Whether the server has exited; when it has, whatever it left in its process group is killed (before the
+        server is reaped, so that its process and group id cannot have been given to another process yet)."""
         if self._status is not None:
             return True
         try:
-            pid, status = os.waitpid(self.pid, os.WNOHANG)
+            info = os.waitid(os.P_PID, self.pid, os.WEXITED | os.WNOHANG | os.WNOWAIT)
         except ChildProcessError:
             self._status = -1
             return True
-        if pid == 0:
+        if info is None:
             return False
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.pid, signal.SIGKILL)
+        _, status = os.waitpid(self.pid, 0)
         self._status = os.waitstatus_to_exitcode(status)
         return True
 
@@ -262,13 +262,13 @@ class ServerProcess:
                 _child(child_end, log_fd, str(self.binary), self.options, self.folder)
             self.pid = pid
             child_end.close()
-            os.close(log_fd)
             parent_end.settimeout(self.timeout)
             try:
                 message, fds, _, _ = socket.recv_fds(parent_end, 4096, 2)
             except TimeoutError:
                 raise ServerError(f"the server's namespace was not set up within {self.timeout:g} s") from None
         finally:
+            os.close(log_fd)
             parent_end.close()
             with contextlib.suppress(OSError):
                 child_end.close()
