@@ -20,6 +20,7 @@ from tests.test_cli import run_error
         (["pitch", "dribbler", "--server", "/no/such/rcssserver"], "is not an executable file"),
         (["pitch", "dribbler", "--server", "x", "--out", "results.json"], "must end with .csv"),
         (["pitch", "dribbler", "--episodes", "0"], "must be positive"),
+        (["pitch", "dribbler", "--server", "x", "--world-seed", "4294967295"], "--world-seed: world_seed must be an integer"),
     ],
 )
 def test_pitch_errors(capsys, argv: list[str], message: str) -> None:

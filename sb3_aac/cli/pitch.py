@@ -7,7 +7,7 @@ import csv
 import sys
 from typing import Any
 
-from sb3_aac.cli.arguments import CliError, nonnegative_int, output_file, positive_float, positive_int, written
+from sb3_aac.cli.arguments import CliError, output_file, positive_float, positive_int, seed_int, written
 from sb3_aac.cli.models import load_policy
 
 CSV_COLUMNS = ("episode", "type_id", "real_distance", "real_ball_lost", "sim_distance", "sim_ball_lost")
@@ -30,7 +30,7 @@ def add_pitch_command(add: Any, played: argparse.ArgumentParser) -> None:
     pitch.add_argument("--episodes", type=positive_int, default=1000, help="episodes on each side (default: %(default)s)")
     pitch.add_argument(
         "--world-seed",
-        type=nonnegative_int,
+        type=seed_int,
         default=1,
         help="the server's player::random_seed: which 18 heterogeneous types it has (default: %(default)s)",
     )
@@ -49,7 +49,7 @@ def add_pitch_command(add: Any, played: argparse.ArgumentParser) -> None:
 
 def cmd_pitch(args: argparse.Namespace) -> None:
     from robocup_dribble.evaluation import evaluate_episodes
-    from robocup_dribble.rcss import ServerError, find_server, play_on_server, server_episodes
+    from robocup_dribble.rcss import ServerError, checked_profile, find_server, play_on_server, server_episodes, server_options
 
     from sb3_aac.common.statistics import mean_interval, welch_test
 
@@ -62,13 +62,17 @@ def cmd_pitch(args: argparse.Namespace) -> None:
     server = args.server or find_server()
     if server is None:
         raise CliError("no rcssserver found: give --server PATH or set RCSSSERVER (docs/pitch.md: building rcssserver 19)")
-    policy, profile = load_policy(args.model, args.profile)
+    policy, profile = load_policy(args.model, args.profile, args.trust)
     if profile != "v19":
         raise CliError(f"{args.model} plays profile {profile}; only v19 can be played on a real server")
     try:
         import scipy  # noqa: F401
     except ImportError:
         raise CliError("pitch needs scipy for its test (pip install scipy)") from None
+    try:
+        server_options(checked_profile(profile), args.world_seed)  # the server's limits on the seed, before any work
+    except ValueError as error:
+        raise CliError(f"--world-seed: {error}") from None
     episodes = server_episodes(args.episodes, world_seed=args.world_seed, seed=args.seed, profile=profile)
     view = "its own see/sense_body" if args.perceive else "the exact state (fullstate)"
     print(f"{args.model}: {args.episodes} episodes of world {args.world_seed} (player::random_seed), seed {args.seed}")
