@@ -19,7 +19,7 @@ from tests.test_cli import run_error
         (["pitch", "dribbler", "--profile", "v11", "--server", "x"], "v11 cannot be played on a real server"),
         (["pitch", "dribbler", "--server", "/no/such/rcssserver"], "is not an executable file"),
         (["pitch", "dribbler", "--server", "x", "--out", "results.json"], "must end with .csv"),
-        (["pitch", "dribbler", "--episodes", "0"], "must be positive"),
+        (["pitch", "dribbler", "--episodes", "0"], "must be in 1 .. 10,000,000"),
         (["pitch", "dribbler", "--server", "x", "--world-seed", "4294967295"], "--world-seed: world_seed must be an integer"),
     ],
 )

@@ -7,7 +7,7 @@ import csv
 import sys
 from typing import Any
 
-from sb3_aac.cli.arguments import CliError, output_file, positive_float, positive_int, seed_int, written
+from sb3_aac.cli.arguments import CliError, episode_count, output_file, positive_float, seed_int, written
 from sb3_aac.cli.models import load_policy
 
 CSV_COLUMNS = ("episode", "type_id", "real_distance", "real_ball_lost", "sim_distance", "sim_ball_lost")
@@ -27,7 +27,7 @@ def add_pitch_command(add: Any, played: argparse.ArgumentParser) -> None:
         metavar="PATH",
         help="the rcssserver 19 binary (default: $RCSSSERVER, else rcssserver on PATH); see docs/pitch.md to build it",
     )
-    pitch.add_argument("--episodes", type=positive_int, default=1000, help="episodes on each side (default: %(default)s)")
+    pitch.add_argument("--episodes", type=episode_count, default=1000, help="episodes on each side (default: %(default)s)")
     pitch.add_argument(
         "--world-seed",
         type=seed_int,
