@@ -125,8 +125,17 @@ ON_POLICY = ("PPO", "A2C")
 # Rough env steps per second of training on one core, per algorithm (measured on the development machine at the
 # settings above): the local pool starts the longest cells first, and a wall-clock cell's schedule horizon is what
 # its learner steps in its seconds.
-STEPS_PER_SECOND = {"SarsaAAC": 5000, "PPO": 1600, "A2C": 2000, "SAC": 250, "TD3": 400, "DDPG": 450, "DQN": 900,
-                    "PDQN": 350, "MPDQN": 300}  # fmt: skip
+STEPS_PER_SECOND = {
+    "SarsaAAC": 5000,
+    "PPO": 1600,
+    "A2C": 2000,
+    "SAC": 250,
+    "TD3": 400,
+    "DDPG": 450,
+    "DQN": 900,
+    "PDQN": 350,
+    "MPDQN": 300,
+}
 
 TUNED_SUFFIX = "-tuned"  # a config "<config>-tuned" runs <config> with the settings of its tuning study
 
@@ -220,9 +229,15 @@ QUICK: dict[str, Any] = {
     "eval_episodes": 100,
     "final_episodes": 300,
     # CI-sized studies (benchmarks.tuning): 3 trials of 5,000 env steps, one tuning seed, 2 pruning evaluations.
-    "tuning": {"learners": [("SarsaAAC", "tile"), ("SarsaAAC", "mlp2"), ("PPO", "ppo")], "trials": 3, "seeds": 1,
-               "env_steps": 5_000, "evaluations": 2, "eval_episodes": 20},
-}  # fmt: skip
+    "tuning": {
+        "learners": [("SarsaAAC", "tile"), ("SarsaAAC", "mlp2"), ("PPO", "ppo")],
+        "trials": 3,
+        "seeds": 1,
+        "env_steps": 5_000,
+        "evaluations": 2,
+        "eval_episodes": 20,
+    },
+}
 
 HEADLINE_SEEDS = tuple(range(10))  # the best of each family on each env: >= 10 seeds (benchmarks.significance)
 FEW_SEEDS = tuple(range(3))
@@ -251,8 +266,14 @@ LONG_BUDGET = 500_000
 LONG_SEEDS = PAPER_SEEDS
 # Tuning (benchmarks.tuning): one study per headline learner and env, all the same size: 20 trials x the env's
 # budget x 1 tuning seed, the trial pruned by the median rule on 5 greedy evaluations of 50 episodes.
-FULL_TUNING: dict[str, Any] = {"learners": None, "trials": 20, "seeds": 1, "env_steps": None, "evaluations": 5,
-                               "eval_episodes": 50}  # fmt: skip
+FULL_TUNING: dict[str, Any] = {
+    "learners": None,
+    "trials": 20,
+    "seeds": 1,
+    "env_steps": None,
+    "evaluations": 5,
+    "eval_episodes": 50,
+}
 
 
 def _tuned(learners: list[tuple[str, str]], seeds: tuple[int, ...]) -> list[tuple[str, str, tuple[int, ...]]]:
@@ -261,6 +282,8 @@ def _tuned(learners: list[tuple[str, str]], seeds: tuple[int, ...]) -> list[tupl
 
 def _headline(runs: list[tuple[str, str, tuple[int, ...]]]) -> list[tuple[str, str]]:
     return [(algo, config) for algo, config, seeds in runs if len(seeds) >= len(HEADLINE_SEEDS)]
+
+
 FULL: dict[str, Any] = {
     "envs": {
         "RoboCupDribblePaper-v0": {
@@ -354,7 +377,7 @@ def tuning_spec(preset: str | dict[str, Any]) -> dict[str, Any]:
         env_id: list(learners) if learners is not None else _headline([r for r in env["runs"] if not is_tuned(r[1])])
         for env_id, env in p["envs"].items()
     }
-    spec["env_steps"] = {env_id: steps or env["budget"] for env_id, env in p["envs"].items()}
+    spec["env_steps"] = {env_id: env["budget"] if steps is None else steps for env_id, env in p["envs"].items()}
     return spec
 
 

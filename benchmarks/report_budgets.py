@@ -75,9 +75,17 @@ def tuned_section(groups: dict[str, list[Group]]) -> list[str]:
                 c = compare(tuned.final(), default.final(), min_seeds=LONG_VIEW_SEEDS)
                 verdict = comparison_text(c, "tuned", "default", unit, digits)
                 default_text = f"{fmt_ci(default.final(), digits)} ({len(default.runs)} seeds)"
-            rows.append([env_id, default.label if default else tuned.label, f"{tuned.budget:,}", default_text,
-                         f"{fmt_ci(tuned.final(), digits)} ({len(tuned.runs)} seeds)", verdict,
-                         tuning_budget_text(tuned)])  # fmt: skip
+            rows.append(
+                [
+                    env_id,
+                    default.label if default else tuned.label,
+                    f"{tuned.budget:,}",
+                    default_text,
+                    f"{fmt_ci(tuned.final(), digits)} ({len(tuned.runs)} seeds)",
+                    verdict,
+                    tuning_budget_text(tuned),
+                ]
+            )
     if not rows:
         return []
     return [

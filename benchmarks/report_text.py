@@ -363,8 +363,8 @@ def headline_verdicts(groups: dict[str, list[Group]], references: dict[str, Any]
         unit, digits = (" m", 1) if domains.is_dribbling(env_id) else ("", 3)
         a = f"SarsaAAC {sarsa.config}"
         lines.append(
-            f"- **{env_id}** ({sarsa.budget:,} env steps): best SarsaAAC config, {sarsa.label}: {fmt_ci(sarsa.final(), digits)}{unit} "
-            f"({len(sarsa.runs)} seeds)."
+            f"- **{env_id}** ({sarsa.budget:,} env steps): best SarsaAAC config, {sarsa.label}: "
+            f"{fmt_ci(sarsa.final(), digits)}{unit} ({len(sarsa.runs)} seeds)."
         )
         for kind in ("parameterized peer", "SB3 baseline"):
             other = headline_pair(gs, kind, min_seeds)

@@ -47,7 +47,7 @@ from typing import Any
 
 from benchmarks import cells
 from benchmarks.engines import RayEngine
-from benchmarks.presets import PRESETS, build_cells, select
+from benchmarks.presets import PRESETS, Cell, build_cells, select
 from benchmarks.provenance import (
     ENV_VAR,
     REPO,
@@ -103,7 +103,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tune", action="store_true", help="run the preset's tuning stage (not the grid)")
     parser.add_argument("--trials", type=_positive_int, default=None, help="finished trials per study (default: the preset's)")
     parser.add_argument(
-        "--storage", default=None, help="one Optuna journal file or database URL for all studies (default: a journal per study)"
+        "--storage",
+        default=None,
+        help="one Optuna journal file or database URL for all studies (default: a journal per study)",
     )
     parser.add_argument("--tuned-dir", default=None, help="folder of the tuned settings (default: hyperparams/tuned)")
     args = parser.parse_args(argv)
@@ -112,11 +114,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("give --preset (run the grid) and/or --reliability")
     if args.address and args.engine != "ray":
         parser.error("--address needs --engine ray")
-    if (args.trials or args.storage) and not args.tune:
-        parser.error("--trials and --storage belong to --tune")
-    if args.tuned_dir:
-        os.environ[TUNED_DIR_VAR] = str(Path(args.tuned_dir).resolve())  # read by the cells, here and in Ray tasks
-    if args.tune:
+    if _tuning_arguments(parser, args):
         return tune(parser, args)
     out = Path(args.out or f"runs/bench-{args.preset or 'full'}")
     if not args.list:
@@ -132,11 +130,7 @@ def main(argv: list[str] | None = None) -> int:
         grid = select(every, args.only)
         if not grid:
             parser.error(f"--only {args.only!r} matches none of the {len(every)} cells of preset {args.preset!r} (see --list)")
-        try:
-            grid = resolve_tuned(grid)
-        except ValueError as error:
-            print(f"refused: {error}; or leave the tuned cells out with --only", file=sys.stderr)
-            return 2
+        grid = _with_tuned_settings(grid)
         if args.list:
             for cell in grid:
                 print(f"{'done' if cells.is_finished(out, cell) else 'todo'}  {cell.cell_id}")
@@ -176,6 +170,24 @@ def main(argv: list[str] | None = None) -> int:
         run_reliability(out, args.players)
         print(f"reliability test written to {out / 'reliability.json'}")
     return 1 if args.preset and status["failed"] else 0
+
+
+def _with_tuned_settings(grid: list[Cell]) -> list[Cell]:
+    """The grid's tuned cells with their settings (:func:`benchmarks.tuned.resolve_tuned`); exits (2) if some lack them."""
+    try:
+        return resolve_tuned(grid)
+    except ValueError as error:
+        print(f"refused: {error}; or leave the tuned cells out with --only", file=sys.stderr)
+        raise SystemExit(2) from None
+
+
+def _tuning_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -> bool:
+    """Check the tuning options and make ``--tuned-dir`` the cells' folder of tuned settings; whether to tune."""
+    if (args.trials or args.storage) and not args.tune:
+        parser.error("--trials and --storage belong to --tune")
+    if args.tuned_dir:
+        os.environ[TUNED_DIR_VAR] = str(Path(args.tuned_dir).resolve())  # read by the cells, here and in Ray tasks
+    return bool(args.tune)
 
 
 def tune(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:

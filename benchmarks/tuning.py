@@ -102,8 +102,13 @@ def plan_studies(preset: str | dict[str, Any], trials: int | None = None, only: 
     """
     spec = tuning_spec(preset)
     trials = spec["trials"] if trials is None else trials
-    for key, value in (("trials", trials), ("seeds", spec["seeds"]), ("evaluations", spec["evaluations"]),
-                       ("eval_episodes", spec["eval_episodes"]), *(("env_steps", v) for v in spec["env_steps"].values())):  # fmt: skip
+    for key, value in (
+        ("trials", trials),
+        ("seeds", spec["seeds"]),
+        ("evaluations", spec["evaluations"]),
+        ("eval_episodes", spec["eval_episodes"]),
+        *(("env_steps", v) for v in spec["env_steps"].values()),
+    ):
         if not (isinstance(value, int) and value >= 1):
             raise ValueError(f"the tuning budget's {key} must be a whole number >= 1, got {value!r}")
     studies = []
@@ -111,8 +116,18 @@ def plan_studies(preset: str | dict[str, Any], trials: int | None = None, only: 
         for algo, config in learners:
             if not tunable(algo, config):
                 raise ValueError(f"{algo} ({config}) has no search space (benchmarks.tuned) and cannot be tuned")
-            studies.append(StudySpec(env_id, algo, config, trials, spec["env_steps"][env_id], spec["seeds"],
-                                     spec["evaluations"], spec["eval_episodes"]))  # fmt: skip
+            studies.append(
+                StudySpec(
+                    env_id,
+                    algo,
+                    config,
+                    trials,
+                    spec["env_steps"][env_id],
+                    spec["seeds"],
+                    spec["evaluations"],
+                    spec["eval_episodes"],
+                )
+            )
     if not only:
         return studies
     globs = [p if any(c in p for c in "*?[") else f"*{p}*" for p in (s.strip() for s in only.split(",")) if p]
@@ -137,8 +152,9 @@ def open_study(storage: BaseStorage, study: StudySpec, create: bool = False) -> 
     """
     pruner = median_pruner(STARTUP_TRIALS, WARMUP_EVALUATIONS)
     if create:
-        loaded = optuna.create_study(storage=storage, study_name=study.name, direction="maximize", load_if_exists=True,
-                                     pruner=pruner)  # fmt: skip
+        loaded = optuna.create_study(
+            storage=storage, study_name=study.name, direction="maximize", load_if_exists=True, pruner=pruner
+        )
     else:
         loaded = optuna.load_study(study_name=study.name, storage=storage, pruner=pruner)
     stored = loaded.user_attrs.get(STUDY_ATTR)
@@ -147,7 +163,9 @@ def open_study(storage: BaseStorage, study: StudySpec, create: bool = False) -> 
     elif stored != study.identity():
         differ = ", ".join(f"{k}={stored.get(k)} (now {v})" for k, v in study.identity().items() if stored.get(k) != v)
         raise ValueError(f"study {study.name!r} was made with {differ}; give another --storage or remove the old study")
-    loaded.sampler = tpe_sampler(STARTUP_TRIALS, TUNE_SEED + len(loaded.trials))  # a resumed study samples anew
+    # Seeded by the trials so far and the process: a resumed study samples anew, and two processes asking at the same
+    # moment do not draw the same random trial (the constant liar keeps them apart once TPE models the results).
+    loaded.sampler = tpe_sampler(STARTUP_TRIALS, (TUNE_SEED + len(loaded.trials) + 7919 * os.getpid()) % 2**32)
     return loaded
 
 
@@ -215,8 +233,7 @@ def _train_trial(trial: optuna.Trial, study: StudySpec) -> float:
     kwargs = sample_kwargs(trial, study.env_id, study.algo, study.config)
     scores, reports = [], 0
     for seed in range(TUNE_SEED, TUNE_SEED + study.seeds):
-        model, policy, _ = build_model(Cell(study.env_id, study.algo, study.config, seed, study.env_steps,
-                                            overrides=kwargs))  # fmt: skip
+        model, policy, _ = build_model(Cell(study.env_id, study.algo, study.config, seed, study.env_steps, overrides=kwargs))
         report = TrialReport(trial, policy, study, reports)
         try:
             model.learn(study.env_steps, callback=report)
@@ -294,9 +311,11 @@ def _run_ray(tasks: Sequence[Task], engine: Any, report: Report) -> None:
 
     started_here = engine._connect()
     remote = ray.remote(run_trial).options(
-        num_cpus=1, max_retries=engine.max_retries, retry_exceptions=False,
+        num_cpus=1,
+        max_retries=engine.max_retries,
+        retry_exceptions=False,
         runtime_env={"env_vars": {**WORKER_ENV, **_python_path()}},
-    )  # fmt: skip
+    )
     pending = {remote.remote(*task): task for task in tasks}
     try:
         while pending:
@@ -407,8 +426,12 @@ def write_tuned(study: optuna.Study, spec: StudySpec, storage: str, folder: Path
     if storage != str(journal.resolve()):
         with replaced_atomically(journal) as tmp:
             tmp.unlink(missing_ok=True)
-            optuna.copy_study(from_study_name=spec.name, from_storage=open_storage(storage),
-                              to_storage=JournalStorage(JournalFileBackend(str(tmp))), to_study_name=spec.name)  # fmt: skip
+            optuna.copy_study(
+                from_study_name=spec.name,
+                from_storage=open_storage(storage),
+                to_storage=JournalStorage(JournalFileBackend(str(tmp))),
+                to_study_name=spec.name,
+            )
     best = study.best_trial
     states = [t.state for t in study.get_trials(deepcopy=False)]
     record = {

@@ -243,8 +243,10 @@ def test_presets_are_well_formed():
         assert {(c.algo, c.config.removesuffix("-tuned")) for c in trained if is_tuned(c.config)} <= headline
     # the long budget reaches the paper's episode counts; the wall-clock cells run the same seconds per env
     assert LONG_BUDGET >= 300_000 and {c.seconds for c in full if c.seconds} == {WALL_CLOCK_SECONDS} >= {120}
-    assert all(len({c.seed for c in full if c.seconds and (c.env_id, c.algo) == (e, a)}) >= 5
-               for e, a in {(c.env_id, c.algo) for c in full if c.seconds})  # fmt: skip
+    assert all(
+        len({c.seed for c in full if c.seconds and (c.env_id, c.algo) == (e, a)}) >= 5
+        for e, a in {(c.env_id, c.algo) for c in full if c.seconds}
+    )
     assert select(full, "*SarsaAAC-rbf*") and all("rbf" in c.config for c in select(full, "*SarsaAAC-rbf*"))
 
 

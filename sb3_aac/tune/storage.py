@@ -26,7 +26,9 @@ def open_storage(spec: str) -> BaseStorage:
     if "://" in spec:
         if spec.startswith(SQLITE_PREFIX):
             _make_parent(Path(spec[len(SQLITE_PREFIX) :]), spec)
-        engine_kwargs = {"connect_args": {"connect_timeout": CONNECT_TIMEOUT_S}} if spec.startswith(("postgresql", "mysql")) else {}
+        engine_kwargs = (
+            {"connect_args": {"connect_timeout": CONNECT_TIMEOUT_S}} if spec.startswith(("postgresql", "mysql")) else {}
+        )
         try:
             return RDBStorage(spec, engine_kwargs=engine_kwargs)
         except Exception as error:  # sqlalchemy's errors (and a driver's ImportError) have no common base
