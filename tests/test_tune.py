@@ -208,17 +208,17 @@ def test_the_pdqn_spaces_build_models(algo: str) -> None:
         env_id=TOY,
         policy="MlpPolicy",
         algo=algo,
-        timesteps=200,
-        eval_every=100,
+        timesteps=100,
+        eval_every=50,
         eval_episodes=2,
         n_envs=2,
-        fixed={"learning_starts": 50, "info_keywords": ()},
+        fixed={"learning_starts": 60, "info_keywords": ()},
     )
     study = load_study(optuna.storages.InMemoryStorage(), algo, settings)
     outcome = run_study(study, settings, toy_envs, n_trials=1)
     assert finished_trials(outcome.study) == 1
     model = ALGORITHMS[algo]("MlpPolicy", toy_envs(2, 0), **settings.kwargs(outcome.study.best_params))
-    assert model.learning_starts == 50 and model.batch_size == outcome.study.best_params["batch_size"]
+    assert model.learning_starts == 60 and model.batch_size == outcome.study.best_params["batch_size"]
 
 
 @pytest.mark.parametrize("policy", ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy"])
