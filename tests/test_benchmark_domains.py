@@ -1,5 +1,5 @@
-"""The benchmark's domains (benchmarks/domains.py): Platform-v0 beside dribbling, common random numbers on both,
-and the summaries every cell file uses."""
+"""The benchmark's domains (benchmarks/domains.py): Platform-v0 and the hybrid_domains envs beside dribbling, common
+random numbers on all, and the summaries every cell file uses."""
 
 from __future__ import annotations
 
@@ -24,25 +24,25 @@ class FixedAction:
 
 @pytest.fixture(scope="module")
 def platform_space():
-    env = domains.platform_env()
+    env = domains.episodic_env("Platform-v0")
     yield env.action_space
     env.close()
 
 
 def test_platform_slots_are_common_random_numbers(platform_space):
     policy = FixedAction(platform_space)
-    first = domains.platform_returns(policy, 12, seed=5)
-    again = domains.platform_returns(FixedAction(platform_space), 12, seed=5)
+    first, success = domains.episodic_returns("Platform-v0", policy, 12, seed=5)
+    again, _ = domains.episodic_returns("Platform-v0", FixedAction(platform_space), 12, seed=5)
     np.testing.assert_array_equal(first, again)  # identical policies: identical per-episode results
     # slot j is the same episode whatever the set size: the first 6 of 12 are the 6 of a set of 6
-    np.testing.assert_array_equal(domains.platform_returns(policy, 6, seed=5), first[:6])
-    assert np.all((first >= 0) & (first <= 1 + 1e-9))
+    np.testing.assert_array_equal(domains.episodic_returns("Platform-v0", policy, 6, seed=5)[0], first[:6])
+    assert np.all((first >= 0) & (first <= 1 + 1e-9)) and success is None  # Platform's success is a return of 1
 
 
 def run_slot(seed: int, steps: int = 4) -> np.ndarray:
     """The observations of a fixed action sequence in episode slot 0 of evaluation set ``seed``."""
-    env = domains.platform_env()
-    env.reset(seed=seed * domains.PLATFORM_SLOT_STRIDE)
+    env = domains.episodic_env("Platform-v0")
+    env.reset(seed=seed * domains.SLOT_STRIDE)
     run = np.array([0.0, 10.0, 300.0, 200.0], dtype=np.float32)
     action = (0, tuple(run[1 + i : 2 + i] for i in range(3)))
     observations = []
@@ -73,8 +73,41 @@ def test_summaries_keep_per_episode_scores_in_slot_order():
 
 def test_bad_domain_input_is_named():
     with pytest.raises(ValueError, match="n_episodes"):
-        domains.platform_returns(None, 0, seed=1)
+        domains.episodic_returns("Platform-v0", None, 0, seed=1)
     with pytest.raises(ValueError, match="unknown env id 'Nope-v0'"):
         domains.train_env("Nope-v0", 1, 0)
     with pytest.raises(ValueError, match="ball_lost"):
         domains.summarize("RoboCupDribble-v0", np.array([1.0]))
+
+
+class ScriptedPolicy:
+    """The hybrid_domains scripted policy of an env id, behind SB3's predict."""
+
+    def __init__(self, env_id: str):
+        from hybrid_domains.baselines import scripted_policy
+
+        self.act = scripted_policy(env_id)
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):
+        return self.act(obs), state
+
+
+@pytest.mark.parametrize(
+    ("env_id", "metric", "label"),
+    [
+        ("Goal-v0", "success_share", "P(goal)"),
+        ("Moving-v0", "return_mean", "mean return"),
+        ("Sliding-v0", "return_mean", "mean return"),
+        ("CatchPoint-v0", "success_share", "success share"),
+    ],
+)
+def test_hybrid_domains_train_and_score_with_their_published_metric(env_id, metric, label):
+    assert domains.metric(env_id) == metric and domains.metric_label(env_id) == label
+    venv = domains.train_env(env_id, 2, seed=0)
+    assert venv.num_envs == 2 and len(venv.observation_space.shape) == 1  # a Box, as the learners take
+    venv.close()
+    policy = ScriptedPolicy(env_id)
+    summary = domains.evaluate(env_id, policy, 20, seed=3)
+    again = domains.evaluate(env_id, ScriptedPolicy(env_id), 20, seed=3)
+    assert summary == again and summary["episodes"] == 20 and 0.0 <= summary["success_share"] <= 1.0
+    assert summary["success_share"] > 0  # the scripted policies succeed now and then on every domain
