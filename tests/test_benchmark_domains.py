@@ -111,3 +111,19 @@ def test_hybrid_domains_train_and_score_with_their_published_metric(env_id, metr
     again = domains.evaluate(env_id, ScriptedPolicy(env_id), 20, seed=3)
     assert summary == again and summary["episodes"] == 20 and 0.0 <= summary["success_share"] <= 1.0
     assert summary["success_share"] > 0  # the scripted policies succeed now and then on every domain
+
+
+def test_the_yml_env_wrappers_are_built_in_order():
+    import gymnasium as gym
+
+    import hybrid_domains  # noqa: F401  (registers Goal-v0)
+    from benchmarks.zoo_hyperparams import env_wrapper
+    from hybrid_domains.reference_inputs import GoalFeatures, ScaleReward
+
+    env = env_wrapper("mpdqn", "Goal-v0")(gym.make("Goal-v0"))
+    assert isinstance(env, ScaleReward) and env.scale == 0.02 and isinstance(env.env, GoalFeatures)
+    assert env.observation_space.shape == (17,)
+    platform = env_wrapper("mpdqn", "Platform-v0")(domains.episodic_env("Platform-v0").env)
+    assert platform.observation_space.shape == (9,) and platform.index == 0
+    unwrapped = gym.make("Goal-v0")
+    assert env_wrapper("pdqn", "sb3_aac/ParameterizedTarget-v0")(unwrapped) is unwrapped  # no env_wrapper: identity
