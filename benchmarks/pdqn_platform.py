@@ -9,7 +9,10 @@ evaluates the greedy policy every ``--eval-every`` steps on ``--eval-episodes`` 
 mean return on Platform, P(goal) on Goal), on the env as it is (rewards unscaled). It prints one line per evaluation
 and a final JSON line.
 
-Usage: ``python -m benchmarks.pdqn_platform [--env Platform-v0|Goal-v0] [--algo mpdqn|pdqn] [--steps 100000] [--seed 0]``
+``--reference-init`` (Goal-v0) starts the parameter actor as the reference code does (:mod:`benchmarks.reference_init`).
+
+Usage: ``python -m benchmarks.pdqn_platform [--env Platform-v0|Goal-v0] [--algo mpdqn|pdqn] [--steps 100000] [--seed 0]
+[--reference-init]``
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from typing import Any
 
 import gymnasium as gym
 import torch as th
@@ -70,14 +74,28 @@ def main() -> None:
     parser.add_argument("--eval-every", type=int, default=10_000)
     parser.add_argument("--eval-episodes", type=int, default=100)
     parser.add_argument("--final-episodes", type=int, default=1000)
+    parser.add_argument(
+        "--reference-init",
+        action="store_true",
+        help="Goal-v0: start the parameter actor at the reference code's linear function of the state "
+        "(benchmarks.reference_init) instead of the yml's constant initial_params",
+    )
     args = parser.parse_args()
+    if args.reference_init and args.env != "Goal-v0":
+        parser.error("--reference-init is the reference code's Goal-v0 start; it has none for " + args.env)
     th.set_num_threads(1)
 
     algo = MPDQN if args.algo == "mpdqn" else PDQN
     kwargs = settings(args.algo, args.env)
     if args.exploration_fraction is not None:
         kwargs["exploration_fraction"] = args.exploration_fraction
-    model = algo("MlpPolicy", make_env(args.algo, args.env, args.seed), seed=args.seed, device="cpu", **kwargs)
+    policy: Any = "MlpPolicy"
+    if args.reference_init:
+        from benchmarks.reference_init import PassthroughPolicy
+
+        policy = PassthroughPolicy
+        kwargs["policy_kwargs"] = {**kwargs.get("policy_kwargs", {}), "initial_params": None}
+    model = algo(policy, make_env(args.algo, args.env, args.seed), seed=args.seed, device="cpu", **kwargs)
     evaluation = GreedyEvaluation(args.env, args.eval_every, args.eval_episodes, 1000 + args.seed)
     start = time.perf_counter()
     model.learn(args.steps, callback=evaluation)
@@ -89,6 +107,7 @@ def main() -> None:
             dict(
                 algo=algo.__name__,
                 env=args.env,
+                reference_init=args.reference_init,
                 seed=args.seed,
                 env_steps=model.num_timesteps,
                 episodes=model._episode_num,

@@ -127,3 +127,26 @@ def test_the_yml_env_wrappers_are_built_in_order():
     assert platform.observation_space.shape == (9,) and platform.index == 0
     unwrapped = gym.make("Goal-v0")
     assert env_wrapper("pdqn", "sb3_aac/ParameterizedTarget-v0")(unwrapped) is unwrapped  # no env_wrapper: identity
+
+
+def test_the_reference_goal_start_is_the_reference_function_on_our_scaling():
+    """The passthrough re-expressed on the policy's feature scaling gives the reference's parameters: at a state with
+    the ball at (10, 0) and the keeper straight ahead (u = (-1, 0)), kick-to x = -0.375 + 0.5 * 0 + 0.0625 * -1 and
+    y = 0; shoot +/-0.857 (scaled)."""
+    import gymnasium as gym
+
+    import hybrid_domains  # noqa: F401  (registers Goal-v0)
+    from benchmarks.reference_init import PassthroughPolicy, goal_passthrough
+    from hybrid_domains.reference_inputs import GoalFeatures
+    from sb3_aac import MPDQN
+
+    box = GoalFeatures(gym.make("Goal-v0")).observation_space
+    low, high = box.low.astype(float), box.high.astype(float)
+    weight, bias = goal_passthrough(low, high)
+    obs = np.zeros(17)
+    obs[[5, 10, 14]] = 15.0, 10.0, -1.0  # keeper x 15, ball x 10, unit keeper-to-ball (-1, 0)
+    features = (obs - (high + low) / 2) / ((high - low) / 2)
+    np.testing.assert_allclose(weight @ features + bias, [-0.375 - 0.0625, 0.0, 0.857347, -0.857347], atol=1e-6)
+    model = MPDQN(PassthroughPolicy, GoalFeatures(gym.make("Goal-v0")), learning_starts=10, policy_kwargs={"net_arch": [8]})
+    _, params = model._greedy_numpy(obs[None].astype(np.float32))
+    np.testing.assert_allclose(params[0], weight @ features + bias, atol=1e-3)  # the trained part starts near 0
