@@ -443,3 +443,16 @@ def test_scripted_policies_beat_random_ones_on_the_same_episodes(env_id):
     assert scripted["success_share"] > uniform["success_share"] and scripted["return_mean"] > uniform["return_mean"]
     with pytest.raises(ValueError, match="episodes"):
         policy_figures(env_id, scripted_policy(env_id), 0)
+
+
+def test_the_package_needs_gymnasium_and_numpy_only():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, gymnasium as gym, hybrid_domains, hybrid_domains.baselines, hybrid_domains.reference_inputs\n"
+        "env = gym.make('Goal-v0'); env.reset(seed=0)\n"
+        "print(sorted({m.split('.')[0] for m in sys.modules} & {'sb3_aac', 'torch', 'stable_baselines3', 'robocup_dribble'}))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
