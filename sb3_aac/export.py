@@ -24,14 +24,16 @@ from sb3_aac.common.tile_coding import TileBank
 from sb3_aac.runtime.format import (
     ARRAY_DTYPE,
     FORMAT_NAME,
-    FORMAT_VERSION,
     TILE_ARRAYS,
     encode_policy_file,
     expected_array_shapes,
     output_layout,
     policy_file_path,
     read_policy_file,
+    written_version,
 )
+from sb3_aac.runtime.forward import network_array_shapes
+from sb3_aac.sarsa_aac.deep import DeepBank
 
 
 def _policy_of(model: Any) -> Any:
@@ -58,6 +60,8 @@ def policy_arrays(policy: Any) -> dict[str, np.ndarray]:
     }
     if isinstance(bank, TileBank):
         names = [name for name in TILE_ARRAYS if name not in arrays]
+    elif isinstance(bank, DeepBank):
+        names = list(network_array_shapes(bank.networks))
     else:
         names = ["rbf_centers", "rbf_widths"] if bank.n_rbf is not None else []
         names += ["weight", "bias"] if bank.hidden_units is None else ["weight1", "bias1", "weight2", "bias2"]
@@ -76,9 +80,10 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
     bank, spec = policy.approximators, policy.spec
     k, n_params = spec.n_types, spec.n_params
     n_outputs, outputs = output_layout(k, n_params)
+    head = _head_header(bank)
     return {
         "format": FORMAT_NAME,
-        "version": FORMAT_VERSION,
+        "version": written_version(head),
         "writer": f"sb3-aac {__version__}",
         "algorithm": "SarsaAAC",
         "policy_class": type(policy).__name__,
@@ -101,12 +106,18 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
             "n_outputs": n_outputs,
             "outputs": outputs,
             "features": _features_header(policy),
-            "head": (
-                {"type": "linear"} if bank.hidden_units is None else {"type": "tanh_mlp", "hidden_units": bank.hidden_units}
-            ),
+            "head": head,
         },
         "metadata": dict(metadata or {}),
     }
+
+
+def _head_header(bank: Any) -> dict[str, Any]:
+    if isinstance(bank, DeepBank):
+        return {"type": "networks", "networks": bank.networks}
+    if isinstance(bank, TileBank) or bank.hidden_units is None:
+        return {"type": "linear"}
+    return {"type": "tanh_mlp", "hidden_units": bank.hidden_units}
 
 
 def _features_header(policy: Any) -> dict[str, Any]:
@@ -121,6 +132,8 @@ def _features_header(policy: Any) -> dict[str, Any]:
             "group_size": int(np.shape(bank.tile_inputs)[1]),
             "n_features": bank.n_features,
         }
+    if isinstance(bank, DeepBank):
+        return {"type": "scaled", "n_features": bank.n_inputs}
     if bank.n_rbf is None:
         return {"type": "scaled", "n_features": bank.n_features}
     window = None if bank.rbf_window is None else float(bank.rbf_window)
@@ -135,7 +148,8 @@ def _features_header(policy: Any) -> dict[str, Any]:
 
 def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, Any] | None = None) -> Path:
     """
-    Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy``, version 2).
+    Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy``: version 3 for
+    a :class:`~sb3_aac.sarsa_aac.policies.DeepPolicy`, whose ``networks`` head older readers cannot compute, else 2).
 
     :param model: a :class:`sb3_aac.SarsaAAC` model, or its policy
     :param path: where to write; ``.aacp`` is appended when the name has no suffix (``RuntimePolicy.load`` accepts

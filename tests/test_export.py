@@ -300,8 +300,8 @@ def test_trailing_garbage_and_pickle(good_file: Path, tmp_dir: Path) -> None:
 
 
 def test_unknown_version_and_format(good_file: Path, tmp_dir: Path) -> None:
-    with pytest.raises(ValueError, match="unknown format version 3"):
-        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(version=3)))
+    with pytest.raises(ValueError, match="unknown format version 4"):
+        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(version=4)))
     with pytest.raises(ValueError, match="format"):
         load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(format="other")))
 

@@ -1,5 +1,5 @@
 """
-The ``.aacp`` policy file format (``sb3-aac-policy`` version 2, see ``docs/export-format.md``): its constants, the
+The ``.aacp`` policy file format (``sb3-aac-policy`` versions 1 to 3, see ``docs/export-format.md``): its constants, the
 arrays a header calls for, the byte layout (:func:`encode_policy_file`, which :func:`sb3_aac.export_policy` writes
 with) and the reader. :func:`read_policy_file` checks the magic bytes, a SHA-256 over the whole file, the format
 version, and the name, dtype, shape and placement of every array before returning any of them;
@@ -20,11 +20,13 @@ from typing import Any
 import numpy as np
 
 from .actions import LAYOUTS
-from .forward import check_rbf_window
+from .forward import check_networks, check_rbf_window, network_array_shapes
 
 FORMAT_NAME = "sb3-aac-policy"
-FORMAT_VERSION = 2  # 2: RBF features may name a window (features.rbf_window)
-SUPPORTED_VERSIONS = (1, 2)
+# 2: RBF features may name a window (features.rbf_window); 3: the "networks" head (feed-forward networks).
+FORMAT_VERSION = 3
+SUPPORTED_VERSIONS = (1, 2, 3)
+NETWORKS_VERSION = 3  # the first version with a "networks" head
 MAGIC = b"SB3AACP\x00"  # 8 bytes
 PREAMBLE = struct.Struct("<8sQ")  # magic, header length (bytes)
 DIGEST_SIZE = 32  # the file ends with the SHA-256 of everything before it
@@ -43,8 +45,14 @@ TILE_ARRAYS = (
 )
 
 
+def written_version(head: dict[str, Any]) -> int:
+    """The version :func:`sb3_aac.export_policy` writes for a header's ``approximators.head``: the oldest that holds
+    it (3 for a ``networks`` head, else 2), so older readers keep reading the policies they can compute."""
+    return NETWORKS_VERSION if head["type"] == "networks" else 2
+
+
 def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
-    """The arrays a version-1 or -2 file must hold, with their shapes, given its (checked) header."""
+    """The arrays a file must hold, with their shapes, given its (checked) header."""
     d = header["observation"]["size"]
     n_params = header["action"]["n_params"]
     approx = header["approximators"]
@@ -64,6 +72,8 @@ def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
         c, k = approx["features"]["n_codings"], approx["features"]["group_size"]
         shapes.update(tile_inputs=(c, k), tile_offsets=(c, k), tile_resolution=(c, k), tile_strides=(c, k), tile_bases=(c,))
         shapes.update(tile_weight=(f, a), bias=(a,))
+    elif approx["head"]["type"] == "networks":
+        shapes.update(network_array_shapes(approx["head"]["networks"]))
     elif approx["head"]["type"] == "linear":
         shapes.update(weight=(a, f), bias=(a,))
     else:
@@ -130,7 +140,7 @@ def _positive_int(value: Any) -> bool:
     return _count(value) and value >= 1
 
 
-def _check_features_and_head(features: Any, head: Any, d: int, path: Any) -> None:
+def _check_features_and_head(features: Any, head: Any, d: int, n_outputs: int, version: int, path: Any) -> None:
     """The header's ``features`` and ``head`` sections (``KeyError``/``TypeError`` for a missing or mistyped field)."""
     if features["type"] == "rbf":
         if not _positive_int(features["n_rbf"]) or features["n_features"] != d * features["n_rbf"]:
@@ -152,12 +162,20 @@ def _check_features_and_head(features: Any, head: Any, d: int, path: Any) -> Non
     if head["type"] == "tanh_mlp":
         if not _positive_int(head["hidden_units"]):
             raise _fail(path, f"hidden_units={head['hidden_units']!r}")
+    elif head["type"] == "networks":
+        if version < NETWORKS_VERSION or features["type"] != "scaled":
+            why = f"a networks head needs version >= {NETWORKS_VERSION} and scaled features"
+            raise _fail(path, f"{why}, got version {version}, features {features!r}")
+        try:
+            check_networks(head["networks"], d, n_outputs)
+        except ValueError as error:
+            raise _fail(path, str(error)) from None
     elif head["type"] != "linear":
-        raise _fail(path, f"unknown head type {head['type']!r} (known: 'linear', 'tanh_mlp')")
+        raise _fail(path, f"unknown head type {head['type']!r} (known: 'linear', 'tanh_mlp', 'networks')")
 
 
 def _check_header(header: Any, path: Any) -> None:
-    """Structure and consistency of a version-1 or -2 header (everything but the arrays)."""
+    """Structure and consistency of a header of a supported version (everything but the arrays)."""
     try:
         obs, action, approx = header["observation"], header["action"], header["approximators"]
         d, shape = obs["size"], obs["shape"]
@@ -185,7 +203,7 @@ def _check_header(header: Any, path: Any) -> None:
         if not (_positive_int(features["n_features"]) and _positive_int(approx["n_outputs"])):
             sizes = f"n_features={features['n_features']!r}, n_outputs={approx['n_outputs']!r}"
             raise _fail(path, f"{sizes}: both must be whole numbers >= 1")
-        _check_features_and_head(features, head, d, path)
+        _check_features_and_head(features, head, d, approx["n_outputs"], header["version"], path)
         outputs = approx["outputs"]
         n_outputs, expected = output_layout(k, offset)
         if approx["n_outputs"] != n_outputs or outputs != expected:
@@ -321,7 +339,7 @@ def _array_placements(header: dict[str, Any], path: Any) -> dict[str, tuple[int,
         except (KeyError, TypeError) as error:
             raise _fail(path, f"array {name!r}: malformed entry {entry!r}") from error
         if dtype != ARRAY_DTYPE:
-            raise _fail(path, f"array {name!r} has dtype {dtype!r}, versions 1 and 2 store every array as {ARRAY_DTYPE!r}")
+            raise _fail(path, f"array {name!r} has dtype {dtype!r}, every version stores every array as {ARRAY_DTYPE!r}")
         if not (isinstance(stored_shape, list) and all(_count(s) for s in stored_shape)) or tuple(stored_shape) != shape:
             raise _fail(path, f"array {name!r} has shape {stored_shape!r}, the header's sizes need {shape}")
         size = 8 * math.prod(shape)

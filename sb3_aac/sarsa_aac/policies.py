@@ -11,6 +11,7 @@ from stable_baselines3.common.type_aliases import PyTorchObs
 from sb3_aac.common.approximators import DEFAULT_RBF_WINDOW, ApproximatorBank, BankCache, BankKernel
 from sb3_aac.common.tile_coding import TileBank, TileCache, TileKernel
 from sb3_aac.common.spaces import ParameterizedActionSpec
+from sb3_aac.sarsa_aac.deep import DEFAULT_SPARSITY, DeepBank, DeepCache, DeepKernel
 
 
 class SarsaAACPolicy(BasePolicy):
@@ -86,7 +87,7 @@ class SarsaAACPolicy(BasePolicy):
         n_inputs = int(np.prod(observation_space.shape))
         return tuple(np.broadcast_to(np.asarray(b, dtype=np.float64).ravel(), (n_inputs,)) for b in (low, high))  # type: ignore[return-value]
 
-    def _init_bank(self, bank: ApproximatorBank | TileBank) -> None:
+    def _init_bank(self, bank: ApproximatorBank | TileBank | DeepBank) -> None:
         """Adopt ``bank`` (``n_outputs`` approximators) and lay out its output columns."""
         self.approximators = bank
         # Column layout of the bank's outputs.
@@ -109,11 +110,11 @@ class SarsaAACPolicy(BasePolicy):
             rbf_window=self.rbf_window,
         )
 
-    def kernel(self) -> BankKernel | TileKernel:
+    def kernel(self) -> BankKernel | TileKernel | DeepKernel:
         """The numpy kernel on the current parameter storage (CPU only); cached by the bank."""
         return self.approximators.numpy_kernel()
 
-    def rebind(self) -> BankKernel | TileKernel:
+    def rebind(self) -> BankKernel | TileKernel | DeepKernel:
         """Rebuild the numpy views, e.g. after assigning ``param.data`` directly."""
         self.approximators.invalidate_kernel()
         return self.approximators.numpy_kernel()
@@ -131,7 +132,7 @@ class SarsaAACPolicy(BasePolicy):
     def _predict(self, observation: PyTorchObs, deterministic: bool = True) -> th.Tensor:
         raise NotImplementedError("A parameterized action is not one tensor: use predict()")
 
-    def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache | TileCache]:
+    def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache | TileCache | DeepCache]:
         """Numpy forward pass on a batch ``(n, *obs_shape)``: outputs ``(n, A)`` and the update cache."""
         obs = obs.reshape(len(obs), -1)
         if self.approximators.obs_mid.device.type == "cpu":
@@ -311,5 +312,54 @@ class TilePolicy(SarsaAACPolicy):
             tile_groups=self.tile_groups,
             tiles_per_input=self.tiles_per_input,
             n_tilings=self.n_tilings,
+            obs_bounds=self.obs_bounds,
+        )
+
+
+class DeepPolicy(SarsaAACPolicy):
+    """
+    Deep networks trained online, one sample at a time (:mod:`sb3_aac.sarsa_aac.deep`; not in the paper): one
+    feed-forward network for the action-type actor (K outputs), one for the parameter actor (P outputs) and one for
+    the critic, each with the hidden layers ``linear -> layer norm -> leaky ReLU`` of Elsayed, Vasan & Mahmood 2024
+    (arXiv 2410.14606), sparse initialisation, online observation normalisation and overshooting-bounded (ObGD)
+    steps, with eligibility traces when SarsaAAC's ``trace_lambda > 0`` (the paper uses 0.8).
+
+    :param observation_space: A ``Box`` observation space (any shape; it is flattened; infinite bounds are fine)
+    :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
+    :param net_arch: hidden layer sizes of each network, each in ``[1, 4096]`` (default two of 64: the paper used
+        128, 64 keeps one exported decision within 10 us)
+    :param sparsity: share of zero input weights of each unit at initialisation, in ``[0, 1)`` (0.9, the paper's)
+    :param normalize_obs: normalise each input by the running mean and standard deviation of the training
+        observations (the paper's); if False, inputs are scaled from ``obs_bounds`` to ``[-1, 1]``
+    :param kappa: ObGD's overshooting factor, a finite number ``> 0`` (2.0, the paper's value for value networks)
+    :param obs_bounds: ``(low, high)`` for the scaling before the first observations (and always without
+        ``normalize_obs``); defaults to the observation space's bounds
+    """
+
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
+        net_arch: tuple[int, ...] | list[int] = (64, 64),
+        sparsity: float = DEFAULT_SPARSITY,
+        normalize_obs: bool = True,
+        kappa: float = 2.0,
+        obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    ):
+        # Not SarsaAACPolicy.__init__: that one builds a dense bank.
+        low, high = self._init_spaces(observation_space, action_space, obs_bounds)
+        if not isinstance(normalize_obs, (bool, np.bool_)):
+            raise ValueError(f"normalize_obs must be True or False, got {normalize_obs!r}")
+        self.net_arch, self.sparsity, self.normalize_obs, self.kappa = tuple(net_arch), sparsity, bool(normalize_obs), kappa
+        self._init_bank(DeepBank(low, high, self.n_types, self.n_params, self.net_arch, sparsity, self.normalize_obs, kappa))
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        return dict(
+            observation_space=self.observation_space,
+            action_space=self.action_space,
+            net_arch=self.net_arch,
+            sparsity=self.sparsity,
+            normalize_obs=self.normalize_obs,
+            kappa=self.kappa,
             obs_bounds=self.obs_bounds,
         )

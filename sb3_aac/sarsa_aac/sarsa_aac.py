@@ -19,7 +19,8 @@ from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_m
 from sb3_aac.common.array_env import array_path
 from sb3_aac.common.model_files import check_model_file, check_policy_class
 from sb3_aac.common.tile_coding import TileBank, TileKernel, TileTraces
-from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
+from sb3_aac.sarsa_aac.deep import DeepBank, DeepKernel, DeepTraces
+from sb3_aac.sarsa_aac.policies import DeepPolicy, MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
 # The info of a lane whose episode goes on, on the array path (read-only, shared by those lanes).
@@ -174,6 +175,7 @@ class SarsaAAC(BaseAlgorithm):
     """
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {
+        "DeepPolicy": DeepPolicy,
         "MlpPolicy": MlpPolicy,
         "RbfMlpPolicy": RbfMlpPolicy,
         "RbfPolicy": RbfPolicy,
@@ -299,15 +301,15 @@ class SarsaAAC(BaseAlgorithm):
         # SB3 types policy_class as type[BasePolicy]; __init__ checked that it is a SarsaAACPolicy.
         self.policy = self.policy_class(self.observation_space, self.action_space, **self.policy_kwargs)  # type: ignore[assignment]
         self.policy = self.policy.to(self.device)
-        if self.trace_lambda > 0 and not isinstance(self.policy.approximators, TileBank):
+        if self.trace_lambda > 0 and not isinstance(self.policy.approximators, (TileBank, DeepBank)):
             raise ValueError(
-                f"trace_lambda > 0 (got {self.trace_lambda}) needs linear tile heads (TilePolicy); "
+                f"trace_lambda > 0 (got {self.trace_lambda}) needs linear tile heads (TilePolicy) or DeepPolicy; "
                 f"{type(self.policy).__name__} learns with one-step updates only (trace_lambda=0)"
             )
         # The action a' chosen at _last_obs and not yet executed: (obs (n, D), k (n,), scaled params (n, P)).
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         # The lanes' eligibility traces of the episodes under way (None with trace_lambda == 0 or before learn).
-        self._traces: TileTraces | None = None
+        self._traces: TileTraces | DeepTraces | None = None
         # Count and sum of squares of the lanes' discounted returns so far; return_scale = sqrt(sum / count).
         # Kept when load() calls this after restoring them (0 until the first non-zero reward).
         self._return_moments = getattr(self, "_return_moments", np.zeros(2))
@@ -415,6 +417,7 @@ class SarsaAAC(BaseAlgorithm):
         self._kernel = self.policy.rebind()
         if self._pending is None or self._last_obs is not obs_before:
             obs = self._last_obs.astype(np.float64).reshape(self.n_envs, -1)  # type: ignore[union-attr]
+            self._observe(obs)
             self._pending = (obs, *self._explore(self._kernel.forward(obs)[0]))
             self._traces = self._new_traces()  # new episodes
 
@@ -520,8 +523,9 @@ class SarsaAAC(BaseAlgorithm):
         else:
             batch = np.concatenate((obs, next_obs))
         rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
-        # Before the forward pass: it may put the weights into return units.
+        # Before the forward pass: it may put the weights into return units, and s' normalised with itself.
         self._track_return_scale(rewards, dones)
+        self._observe(next_obs)
         # One forward pass for s (weights as they are now), s' and the terminal observations.
         out, cache = kernel.forward(batch)
         if not math.isfinite(out.sum()):  # one reduction catches NaN and inf before an action is chosen from them
@@ -543,11 +547,16 @@ class SarsaAAC(BaseAlgorithm):
         # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0.
         err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
         err[:, vi] = delta
-        if self._traces is None:
+        if isinstance(kernel, DeepKernel):
+            assert self._traces is None or isinstance(self._traces, DeepTraces)
+            kernel.update(cache, err, self._lr, self._hidden_gain, k, self._traces)  # type: ignore[arg-type]
+            if any_done and self._traces is not None:
+                self._traces.clear(np.flatnonzero(dones))
+        elif self._traces is None:
             # The cache comes from the same kernel's forward pass, so its kind matches (mypy cannot pair the unions).
             kernel.update(cache, err, self._lr, self._hidden_gain)  # type: ignore[arg-type]
         else:
-            assert isinstance(kernel, TileKernel)  # checked in _setup_model
+            assert isinstance(kernel, TileKernel) and isinstance(self._traces, TileTraces)  # checked in _setup_model
             kernel.update_traced(cache, err, self._lr, self._trace_hits[k], self._traces)  # type: ignore[arg-type]
             if any_done:
                 self._traces.clear(np.flatnonzero(dones))
@@ -615,11 +624,18 @@ class SarsaAAC(BaseAlgorithm):
             key: deque(maxlen=self._stats_window_size) for key in self.info_keywords
         }
 
-    def _new_traces(self) -> TileTraces | None:
+    def _observe(self, obs: np.ndarray) -> None:
+        """Fold new observations ``(n, D)`` into a deep policy's running statistics (other policies keep none)."""
+        if isinstance(self.policy.approximators, DeepBank):
+            self.policy.approximators.observe(obs)
+
+    def _new_traces(self) -> TileTraces | DeepTraces | None:
         """Zero eligibility traces of the action-type actor and the critic, one per lane (None if ``trace_lambda == 0``)."""
         if self.trace_lambda == 0:
             return None
         policy = self.policy
+        if isinstance(policy.approximators, DeepBank):
+            return policy.approximators.new_traces(self.n_envs, self.gamma * self.trace_lambda)
         assert isinstance(policy.approximators, TileBank)  # checked in _setup_model
         columns = np.array([*range(policy.n_types), policy.value_index])
         # hit[k]: the columns whose trace the features of (s, k) set: Q_k and V.
