@@ -52,6 +52,7 @@ POLICIES: dict[str, tuple[str, dict[str, Any]]] = {
     "rbf10": ("RbfPolicy", {"n_rbf": 10}),
     "rbf50": ("RbfPolicy", {"n_rbf": 50}),
     "tile": ("TilePolicy", {}),
+    "deep": ("DeepPolicy", {}),
 }
 
 
@@ -120,12 +121,13 @@ TASKS: dict[str, tuple[Callable[[int], VecEnv], int, dict[str, Any], Score]] = {
     "v19": (dribble_env("v19"), 150_000, {}, dribble_score("v19")),
     "platform": (lambda seed: platform_env(16, seed), 100_000, {"info_keywords": ()}, mean_return(platform_env, 200)),
     "nav": (vec(NavigationEnv, 16), 300_000, {"info_keywords": ()}, navigation_success),
+    "nav1": (vec(NavigationEnv, 1), 60_000, {"info_keywords": ()}, navigation_success),
     "toy": (lambda seed: toy(4, seed), 20_000, {}, mean_return(toy, 200)),
 }
 
 
 # The greedy score each task's target asks for (issue 8); the paper's MLP policies are asked for 16 m.
-TARGETS = {"paper": 25.0, "v19": 25.4, "platform": 0.98, "nav": 0.9, "toy": 9.0}
+TARGETS = {"paper": 25.0, "v19": 25.4, "platform": 0.98, "nav": 0.9, "nav1": 0.9, "toy": 9.0}
 MLP_PAPER_TARGET = 16.0
 
 
@@ -215,6 +217,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--only", default=DEFAULT_RUNS, help="comma-separated task-policy pairs")
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--first-seed", type=int, default=0, help="seeds first-seed .. first-seed + seeds - 1")
     parser.add_argument("--steps", type=int, default=None, help="override every task's training steps")
     parser.add_argument("--eval-every", type=int, default=None, help="env steps between greedy checks of the target")
     parser.add_argument("--rate", type=float, default=None, help="set the three learning rates (default: SarsaAAC's)")
@@ -228,7 +231,8 @@ def main() -> None:
         task, policy_name = pair.split("-")
         if task not in TASKS or policy_name not in POLICIES:
             raise SystemExit(f"unknown pair {pair!r}: tasks {list(TASKS)}, policies {list(POLICIES)}")
-        run(task, policy_name, list(range(args.seeds)), args.steps, args.rate, settings, args.eval_every)
+        seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+        run(task, policy_name, seeds, args.steps, args.rate, settings, args.eval_every)
 
 
 if __name__ == "__main__":

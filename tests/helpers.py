@@ -4,7 +4,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-POLICIES = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy"]
+POLICIES = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy", "DeepPolicy"]
 LAYOUTS = ["nested", "flat", "shared", "oneof"]
 
 

@@ -44,9 +44,12 @@ def test_save_load(tmp_path, policy):
 
     # Random parameters really change every tensor and every prediction (the numpy views follow).
     before, _ = model.predict(observations, deterministic=True)
-    # (a tile policy's integer grid layout stays)
+    # (a tile policy's integer grid layout stays; input scales and a deep policy's observation statistics stay > 0)
     random_params = {
-        "policy": {k: th.rand_like(v) * 2 - 1 if v.is_floating_point() else v for k, v in params["policy"].items()}
+        "policy": {
+            k: (th.rand_like(v) + 0.5 if "obs_" in k else th.rand_like(v) * 2 - 1) if v.is_floating_point() else v
+            for k, v in params["policy"].items()
+        }
     }
     model.set_parameters(random_params, exact_match=True)
     for key, value in model.get_parameters()["policy"].items():

@@ -27,9 +27,11 @@ output layers are read as ``weight / u``, so ObGD's bound and every step are the
 
 Lanes (a VecEnv of ``n`` lanes): each lane has its own trace, and each lane's sample takes the ObGD step it would take
 alone at the current weights, so the per-sample step does not depend on ``n``; with one lane this is stream ObGD
-exactly. The lanes' steps are added; where that sum would move some sample's output (to first order) by more than
-its own error and more than its own step alone would, the summed step is scaled down until it does not (one factor
-per network and step): added steps of similar samples cannot overshoot together.
+exactly. The lanes' steps are added (as ``n`` steps taken one after another would be, to first order in the step);
+where that sum would carry the batch past the minimum of its squared errors along the summed step's direction (to
+first order: ``t* = sum_i delta_i c_i / sum_i c_i**2 < 1``, ``c_i`` the change of sample ``i``'s output), it is
+shortened to ``t*`` (one factor per network and step). So steps of similar samples cannot overshoot together, while
+samples that pull apart keep their own steps.
 
 The parameters are float64 torch tensors (for SB3's save/load); the forward pass is
 :class:`sb3_aac.runtime.forward.NetworkForward` (the exported runtime's code) and :class:`DeepKernel` adds the
@@ -338,7 +340,8 @@ class DeepKernel(NetworkForward):
                     g = g @ (weight / unit if j == last else weight)  # type: ignore[operator]
             elif kind == "layernorm":
                 y, inv_std = cache[j][1][:n], cache[j][2][:n]
-                g = inv_std * (g - g.mean(-1, keepdims=True) - y * (g * y).mean(-1, keepdims=True))
+                size = g.shape[-1]
+                g = inv_std * (g - g.sum(-1, keepdims=True) / size - y * ((g * y).sum(-1, keepdims=True) / size))
             elif kind == "tanh":
                 t = np.tanh(h_in)
                 g = g * (1.0 - t * t)
@@ -366,25 +369,22 @@ class DeepKernel(NetworkForward):
         scale = alpha / np.maximum(alpha * self.kappa * np.maximum(np.abs(delta), 1.0) * norm1, 1.0)
         w = scale * delta  # (n,)
         steps: list[tuple[np.ndarray, np.ndarray]] = []
-        own = np.zeros_like(w)  # each sample's output change under its own step alone
-        moved = np.zeros_like(w)  # ... under the summed step
+        batch = len(w) > 1  # one sample's summed step is its own: no bound to apply
+        moved = np.zeros_like(w)  # each sample's output change under the summed step (first order)
         for layer, (a, x) in enumerate(grads):
             if traces is not None:
                 tw, tb = traces.weights[i][layer], traces.biases[i][layer]
                 step_w, step_b = np.einsum("n,noi->oi", w, tw), w @ tb
-                own += w * (np.einsum("no,noi,ni->n", a, tw, x) + (a * tb).sum(1))
             else:
                 wa = w[:, None] * a
                 step_w, step_b = wa.T @ x, wa.sum(0)
-                own += w * (a * a).sum(1) * ((x * x).sum(1) + 1.0)
-            moved += ((a @ step_w) * x).sum(1) + a @ step_b
+            if batch:
+                moved += ((a @ step_w) * x).sum(1) + a @ step_b
             steps.append((step_w, step_b))
-        # Where the summed step moves a sample by more than its error and its own step, shrink it (one factor).
-        limit = np.maximum(np.abs(delta), np.abs(own))
-        over = (delta != 0) & (np.abs(moved) > limit)
-        if over.any():
-            factor = (limit[over] / np.abs(moved[over])).min()
-            steps = [(sw * factor, sb * factor) for sw, sb in steps]
+        # Past the minimum of the batch's squared errors along the step (to first order)? Shorten it to there.
+        toward, length = delta @ moved, moved @ moved
+        if batch and 0 < toward < length:
+            steps = [(sw * (toward / length), sb * (toward / length)) for sw, sb in steps]
         return steps
 
     def _apply(self, i: int, steps: list[tuple[np.ndarray, np.ndarray]], unit: float) -> None:

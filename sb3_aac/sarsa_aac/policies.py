@@ -11,7 +11,7 @@ from stable_baselines3.common.type_aliases import PyTorchObs
 from sb3_aac.common.approximators import DEFAULT_RBF_WINDOW, ApproximatorBank, BankCache, BankKernel
 from sb3_aac.common.tile_coding import TileBank, TileCache, TileKernel
 from sb3_aac.common.spaces import ParameterizedActionSpec
-from sb3_aac.sarsa_aac.deep import DEFAULT_SPARSITY, DeepBank, DeepCache, DeepKernel
+from sb3_aac.sarsa_aac.deep import DEFAULT_SPARSITY, DeepBank, DeepCache, DeepKernel, check_net_arch
 
 
 class SarsaAACPolicy(BasePolicy):
@@ -350,7 +350,12 @@ class DeepPolicy(SarsaAACPolicy):
         low, high = self._init_spaces(observation_space, action_space, obs_bounds)
         if not isinstance(normalize_obs, (bool, np.bool_)):
             raise ValueError(f"normalize_obs must be True or False, got {normalize_obs!r}")
-        self.net_arch, self.sparsity, self.normalize_obs, self.kappa = tuple(net_arch), sparsity, bool(normalize_obs), kappa
+        self.net_arch, self.sparsity, self.normalize_obs, self.kappa = (
+            check_net_arch(net_arch),
+            sparsity,
+            bool(normalize_obs),
+            kappa,
+        )
         self._init_bank(DeepBank(low, high, self.n_types, self.n_params, self.net_arch, sparsity, self.normalize_obs, kappa))
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
