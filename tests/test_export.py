@@ -82,6 +82,8 @@ def tmp_dir(tmp_path_factory) -> Path:
 def test_same_decisions_as_predict(policy: str, layout: str, tmp_dir: Path) -> None:
     if policy == "TilePolicy":
         model = randomised_model(policy, layout, tiles_per_input=5, n_tilings=3)
+    elif policy == "DeepPolicy":
+        model = randomised_model(policy, layout, net_arch=[16, 16])
     else:
         n_rbf, hidden_units = 7 if policy != "MlpPolicy" else None, None if policy == "RbfPolicy" else 4
         model = randomised_model(policy, layout, n_rbf=n_rbf, hidden_units=hidden_units)
