@@ -12,10 +12,9 @@ the numbers.
 
 Usage: ``python benchmarks/runtime_speed.py [--quick] [--calls 5000] [--repeats 5]``
 
-Targets: <= 10 us per decision for the RBF policy with 10, 30 and 50 RBFs per input (issue 4); <= 5 us at 50 RBFs
-per input with the default RBF window (issue 12); <= 10 us for ``DeepPolicy`` (default networks, two hidden layers of
-64; issue 17); decisions identical to ``model.predict`` (tested in ``tests/test_export.py`` and
-``tests/test_export_networks.py``).
+Targets: <= 10 us per decision for the RBF policy with 10, 30 and 50 RBFs per input; <= 5 us at 50 RBFs
+per input with the default RBF window; <= 10 us for ``DeepPolicy`` (default networks, two hidden layers of 64);
+decisions identical to ``model.predict`` (tested in ``tests/test_export.py`` and ``tests/test_export_networks.py``).
 """
 
 from __future__ import annotations
