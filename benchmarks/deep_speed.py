@@ -10,7 +10,7 @@ timed; the figure is the best of ``--repeats`` timings. One torch and one BLAS t
 
 Usage: ``python benchmarks/deep_speed.py [--env navigation|RoboCupDribblePaper-v0] [--steps 3000] [--lanes 16]``
 
-Target (issue 17): ``DeepPolicy`` >= 5x TD3's env steps per second on the same env. Single runs on a shared machine:
+Target: ``DeepPolicy`` >= 5x TD3's env steps per second on the same env. Single runs on a shared machine:
 report the load average (printed) with the numbers.
 """
 

@@ -244,39 +244,41 @@ def _compile_network_kernel() -> Any:  # noqa: C901 (a compiled kernel: its loop
                 q = layer_base + layer * n_layer
                 code, n_out, pw, pb, pc = meta[q], meta[q + 2], meta[q + 3], meta[q + 4], meta[q + 5]
                 dst = 1 if src != 1 else 2
+                h, y = scratch[src], scratch[dst]  # 1-D views: contiguous loops that LLVM vectorises
                 if code == 0:  # linear
+                    weight = pack[pw : pw + n_out * size]
                     for o in range(n_out):
-                        s = pack[pb + o]
-                        row = pw + o * size
+                        row = weight[o * size : (o + 1) * size]
+                        acc = 0.0
                         for i in range(size):
-                            s += pack[row + i] * scratch[src, i]
-                        scratch[dst, o] = s
+                            acc += row[i] * h[i]
+                        y[o] = acc + pack[pb + o]
                     src, size = dst, n_out
                     continue
                 if code == 1:  # layernorm
                     mean = 0.0
                     for i in range(size):
-                        mean += scratch[src, i]
+                        mean += h[i]
                     mean /= size
                     var = 0.0
                     for i in range(size):
-                        c = scratch[src, i] - mean
+                        c = h[i] - mean
                         var += c * c
                     inv_std = 1.0 / np.sqrt(var / size + pack[pc])
                     for i in range(size):
-                        v = (scratch[src, i] - mean) * inv_std
-                        scratch[dst, i] = v * pack[pw + i] + pack[pb + i] if pw >= 0 else v
+                        v = (h[i] - mean) * inv_std
+                        y[i] = v * pack[pw + i] + pack[pb + i] if pw >= 0 else v
                 elif code == 2:
                     for i in range(size):
-                        scratch[dst, i] = np.tanh(scratch[src, i])
+                        y[i] = np.tanh(h[i])
                 elif code == 3:
                     for i in range(size):
-                        scratch[dst, i] = max(scratch[src, i], 0.0)
+                        y[i] = max(h[i], 0.0)
                 else:
                     slope = pack[pc]
                     for i in range(size):
-                        v = scratch[src, i]
-                        scratch[dst, i] = v if v > 0.0 else slope * v
+                        v = h[i]
+                        y[i] = v if v > 0.0 else slope * v
                 src = dst
             for j in range(meta[r + 1] - meta[r]):
                 out[meta[r] + j] = scratch[src, j]
