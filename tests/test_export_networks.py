@@ -147,8 +147,8 @@ def test_deep_files_are_version_3_and_others_stay_version_2(deep_file: Path, tmp
 
 
 def test_a_reader_that_predates_networks_names_the_version_it_needs(deep_file: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(policy_format, "SUPPORTED_VERSIONS", (1, 2))
-    with pytest.raises(ValueError, match=r"unknown format version 3; this reader supports \[1, 2\]"):
+    monkeypatch.setattr(policy_format, "SUPPORTED_VERSIONS", (2,))
+    with pytest.raises(ValueError, match=r"unknown format version 3; this reader supports versions \[2\]"):
         RuntimePolicy.load(deep_file)
 
 

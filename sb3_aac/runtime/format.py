@@ -1,5 +1,5 @@
 """
-The ``.aacp`` policy file format (``sb3-aac-policy`` versions 1 to 3, see ``docs/export-format.md``): its constants, the
+The ``.aacp`` policy file format (``sb3-aac-policy`` versions 2 and 3, see ``docs/export-format.md``): its constants, the
 arrays a header calls for, the byte layout (:func:`encode_policy_file`, which :func:`sb3_aac.export_policy` writes
 with) and the reader. :func:`read_policy_file` checks the magic bytes, a SHA-256 over the whole file, the format
 version, and the name, dtype, shape and placement of every array before returning any of them;
@@ -23,9 +23,9 @@ from .actions import LAYOUTS
 from .forward import check_networks, check_rbf_window, network_array_shapes
 
 FORMAT_NAME = "sb3-aac-policy"
-# 2: RBF features may name a window (features.rbf_window); 3: the "networks" head (feed-forward networks).
+# 2: the first released version; 3: adds the "networks" head (feed-forward networks). Older files are not read.
 FORMAT_VERSION = 3
-SUPPORTED_VERSIONS = (1, 2, 3)
+SUPPORTED_VERSIONS = (2, 3)
 NETWORKS_VERSION = 3  # the first version with a "networks" head
 MAGIC = b"SB3AACP\x00"  # 8 bytes
 PREAMBLE = struct.Struct("<8sQ")  # magic, header length (bytes)
@@ -145,8 +145,8 @@ def _check_features_and_head(features: Any, head: Any, d: int, n_outputs: int, v
     if features["type"] == "rbf":
         if not _positive_int(features["n_rbf"]) or features["n_features"] != d * features["n_rbf"]:
             raise _fail(path, f"RBF features: n_rbf={features['n_rbf']!r}, n_features={features['n_features']!r}, {d} inputs")
-        try:  # version 1 has no window: dense
-            check_rbf_window(features.get("rbf_window"))
+        try:
+            check_rbf_window(features["rbf_window"])  # None: dense
         except ValueError as error:
             raise _fail(path, str(error)) from None
     elif features["type"] == "scaled":
@@ -268,7 +268,7 @@ def _parse_header(text: bytes, path: Any) -> dict[str, Any]:
     if version not in SUPPORTED_VERSIONS:
         raise _fail(
             path,
-            f"unknown format version {version!r}; this reader supports {list(SUPPORTED_VERSIONS)} "
+            f"unknown format version {version!r}; this reader supports versions {list(SUPPORTED_VERSIONS)} "
             "(a newer sb3-aac wrote it? upgrade sb3-aac, or export with this version)",
         )
     _check_header(header, path)
@@ -339,7 +339,7 @@ def _array_placements(header: dict[str, Any], path: Any) -> dict[str, tuple[int,
         except (KeyError, TypeError) as error:
             raise _fail(path, f"array {name!r}: malformed entry {entry!r}") from error
         if dtype != ARRAY_DTYPE:
-            raise _fail(path, f"array {name!r} has dtype {dtype!r}, every version stores every array as {ARRAY_DTYPE!r}")
+            raise _fail(path, f"array {name!r} has dtype {dtype!r}, the format stores every array as {ARRAY_DTYPE!r}")
         if not (isinstance(stored_shape, list) and all(_count(s) for s in stored_shape)) or tuple(stored_shape) != shape:
             raise _fail(path, f"array {name!r} has shape {stored_shape!r}, the header's sizes need {shape}")
         size = 8 * math.prod(shape)

@@ -47,7 +47,7 @@ import numpy as np
 import torch as th
 from torch import nn
 
-from sb3_aac.common.approximators import NumpyBank
+from sb3_aac.sarsa_aac.approximators import NumpyBank
 from sb3_aac.runtime.forward import NetworkForward
 
 # Layer norm's epsilon (torch's default), leaky ReLU's slope (torch's default) and the share of zero input weights
