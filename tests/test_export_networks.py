@@ -158,7 +158,7 @@ def test_a_networks_head_needs_version_3_and_scaled_features(deep_file: Path, tm
 
     def rbf_features(h):
         d = h["observation"]["size"]
-        h["approximators"]["features"] = {"type": "rbf", "n_rbf": 2, "rbf_width": 1.0, "n_features": 2 * d}
+        h["approximators"]["features"] = {"type": "rbf", "n_rbf": 2, "rbf_width": 1.0, "rbf_window": None, "n_features": 2 * d}
 
     with pytest.raises(ValueError, match="scaled features"):
         load_bytes(tmp_path, rewrite(deep_file, rbf_features))
