@@ -64,7 +64,8 @@ def zoo(*argv: str) -> None:
 
 def small(case) -> list[str]:
     """``--hyperparams`` pairs that keep a run to seconds: 2 lanes, the case's small settings, one gradient step."""
-    settings = {"n_envs": 2, **case.kwargs, **({"gradient_steps": 1} if "batch_size" in case.kwargs else {})}
+    one_step = {"gradient_steps": 1} if "gradient_steps" in inspect.signature(case.algo.__init__).parameters else {}
+    settings = {"n_envs": 2, **case.kwargs, **one_step}
     return ["--hyperparams", *(f"{key}:{value!r}" for key, value in settings.items())]
 
 
