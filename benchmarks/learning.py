@@ -157,7 +157,7 @@ class TargetWatch(BaseCallback):
         if self.num_timesteps >= self.next_check:
             self.next_check += self.every
             value = self.score(self.model, True)  # type: ignore[arg-type]
-            episodes = self.model._episode_num  # type: ignore[attr-defined]
+            episodes = self.model.episode_num  # type: ignore[attr-defined]
             self.curve.append((episodes, value))
             if self.reached_at is None and value >= self.target:
                 self.reached_at = episodes
@@ -187,7 +187,7 @@ def run(
         model.learn(budget, callback=watch, log_interval=None)
         # With a watch the time includes its evaluations: the speed is printed without one only.
         speeds.append(budget / (time.perf_counter() - start))
-        episodes.append(model._episode_num)
+        episodes.append(model.episode_num)
         scores.append(score(model, False))
         if watch is not None:
             reached.append(watch.reached_at)

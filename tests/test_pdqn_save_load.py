@@ -6,7 +6,7 @@ import torch as th
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_aac import MPDQN, PDQN, SarsaAAC
-from sb3_aac.common.buffers import ParameterizedReplayBuffer
+from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer
 from sb3_aac.common.envs import ParameterizedTargetEnv
 from tests.helpers import LAYOUTS
 

@@ -79,7 +79,7 @@ def test_no_model_improvement_and_max_episodes():
     model = SarsaAAC("RbfPolicy", make_vec_env(ParameterizedTargetEnv, n_envs=2, seed=0), seed=0)
     model.learn(100_000, callback=StopTrainingOnMaxEpisodes(max_episodes=5))
     assert model.num_timesteps < 100_000
-    assert model._episode_num >= 5
+    assert model.episode_num >= 5
 
 
 def test_function_callback_and_n_calls():

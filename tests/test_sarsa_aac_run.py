@@ -9,6 +9,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 from sb3_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, TilePolicy
 from sb3_aac.common.envs import ParameterizedTargetEnv
+from sb3_aac.sarsa_aac.policies import DenseBankPolicy
 from sb3_aac.sarsa_aac.sarsa_aac import select_types
 from tests.helpers import LAYOUTS, POLICIES, OneStepEnv
 
@@ -59,7 +60,11 @@ def test_policy_aliases_and_classes():
 def test_policy_kwargs(policy, policy_kwargs, n_features, hidden):
     model = SarsaAAC(policy, ParameterizedTargetEnv(), policy_kwargs=policy_kwargs, seed=0)
     bank = model.policy.approximators
-    assert bank.n_features == n_features and bank.hidden_units == hidden
+    assert bank.n_features == n_features
+    if isinstance(model.policy, DenseBankPolicy):
+        assert bank.hidden_units == model.policy.hidden_units == hidden
+    else:  # tiles have a linear head
+        assert isinstance(model.policy, TilePolicy) and hidden is None
     # K=3 Q approximators, 1 + 2 + 2 parameter approximators, 1 critic.
     assert bank.n_outputs == 3 + 5 + 1
     model.learn(200)
@@ -136,7 +141,7 @@ class EpisodeRates(BaseCallback):
         self.rates = []
 
     def _on_step(self):
-        self.rates.append((self.model._episode_num, self.model.exploration_rate, self.model.param_noise))
+        self.rates.append((self.model.episode_num, self.model.exploration_rate, self.model.param_noise))
         return True
 
 

@@ -143,7 +143,7 @@ def learn(model: Any, args: argparse.Namespace, total_timesteps: int) -> None:
     except FloatingPointError as error:
         raise CliError(str(error)) from None
     seconds = time.perf_counter() - start
-    print(f"trained {model.num_timesteps} steps ({model._episode_num} episodes) in {seconds:.1f} s")
+    print(f"trained {model.num_timesteps} steps ({model.episode_num} episodes) in {seconds:.1f} s")
 
 
 def run_settings(args: argparse.Namespace, model: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
@@ -155,7 +155,7 @@ def run_settings(args: argparse.Namespace, model: Any, kwargs: dict[str, Any]) -
         "seed": args.seed,
         "n_envs": args.n_envs,
         "timesteps": model.num_timesteps,
-        "episodes": model._episode_num,
+        "episodes": model.episode_num,
         "hyperparameters": {k: repr(v) for k, v in kwargs.items()},
     }
 

@@ -2,7 +2,6 @@ from __future__ import annotations
 
 import io
 import pathlib
-from collections import deque
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -17,7 +16,6 @@ from stable_baselines3.common.utils import (
     FloatSchedule,
     LinearSchedule,
     polyak_update,
-    safe_mean,
     should_collect_more_steps,
     update_learning_rate,
 )
@@ -25,8 +23,11 @@ from stable_baselines3.common.vec_env import VecEnv
 from torch.nn import functional as F
 
 from sb3_aac.common.array_env import array_path
-from sb3_aac.common.buffers import ParameterizedReplayBuffer
+from sb3_aac.common.divergence import divergence_error
+from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.model_files import check_policy_class
+from sb3_aac.common.observations import observation_batch
+from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer
 from sb3_aac.pdqn.noise import ParamNoise
 from sb3_aac.pdqn.policies import MlpPolicy, PDQNPolicy
 
@@ -45,7 +46,7 @@ def invert_gradients(grad: th.Tensor, params: th.Tensor) -> th.Tensor:
     return th.where(grad > 0, grad * (1.0 - params), grad * (params + 1.0)) / 2.0
 
 
-class PDQN(OffPolicyAlgorithm):
+class PDQN(EpisodeStatsMixin, OffPolicyAlgorithm):
     """
     Parameterized Deep Q-Network (P-DQN) for parameterized actions: pick one of K action types and its parameters.
 
@@ -85,7 +86,7 @@ class PDQN(OffPolicyAlgorithm):
     :param gamma: The discount factor
     :param train_freq: Update the model every ``train_freq`` steps, or a tuple like ``(2, "episode")``
     :param gradient_steps: Gradient steps after each rollout (-1: as many as env steps in the rollout)
-    :param replay_buffer_kwargs: Keyword arguments of :class:`~sb3_aac.common.buffers.ParameterizedReplayBuffer`
+    :param replay_buffer_kwargs: Keyword arguments of :class:`~sb3_aac.pdqn.buffers.ParameterizedReplayBuffer`
     :param optimize_memory_usage: The replay buffer's memory-efficient variant (then pass
         ``replay_buffer_kwargs=dict(handle_timeout_termination=False)``)
     :param target_update_interval: Update the target networks every this many gradient steps
@@ -184,7 +185,7 @@ class PDQN(OffPolicyAlgorithm):
         self.param_noise_theta = param_noise_theta
         self.loss = loss
         self.max_grad_norm = max_grad_norm
-        self.info_keywords = tuple(info_keywords)
+        self._set_info_keywords(info_keywords)
         self.exploration_rate = exploration_initial_eps
         # Saved with the model, so that loading it with the other class fails instead of changing the Q network.
         self.q_network_passes = "multi" if self.multi_pass else "single"
@@ -254,7 +255,7 @@ class PDQN(OffPolicyAlgorithm):
 
     def _excluded_save_params(self) -> list[str]:
         # Per-run state rebuilt by _setup_model (the generator is re-seeded from `seed`).
-        return [*super()._excluded_save_params(), "_rng", "_noise", "_ep_keyword_buffers"]
+        return [*super()._excluded_save_params(), "_rng", "_noise"]
 
     def _get_torch_save_params(self) -> tuple[list[str], list[str]]:
         return ["policy", "policy.q_optimizer", "policy.actor_optimizer"], []
@@ -313,7 +314,7 @@ class PDQN(OffPolicyAlgorithm):
         """
         if deterministic:
             return self.policy.predict(observation, state, episode_start, deterministic=True)
-        obs, vectorized = self.policy.observation_batch(observation)
+        obs, vectorized = observation_batch(observation, self.observation_space)
         k, params = self._greedy_numpy(obs)
         return self.policy.spec.to_env_predicted(self._random_types(k, self.exploration_rate), params, vectorized), state
 
@@ -393,8 +394,7 @@ class PDQN(OffPolicyAlgorithm):
                 if infos[i].get("is_success") is not None:
                     self.ep_success_buffer.append(infos[i]["is_success"])  # type: ignore[union-attr]
                 values = {key: infos[i][key] for key in self.info_keywords if key in infos[i]}
-            for key, value in values.items():
-                self._ep_keyword_buffers[key].append(float(value))
+            self._add_episode_keywords(values)
             self._episode_num += 1
             if log_interval is not None and self._episode_num % log_interval == 0:
                 self.dump_logs()
@@ -464,38 +464,17 @@ class PDQN(OffPolicyAlgorithm):
         self.logger.record("train/actor_loss", float(actor_loss_values.mean()))
 
     def _raise_divergence(self, what: str) -> None:
-        raise FloatingPointError(
-            f"{type(self).__name__} diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}. "
+        remedy = (
             f"Lower the learning rates (learning_rate={self.learning_rate}, actor_learning_rate={self.actor_learning_rate}) "
-            f"or max_grad_norm ({self.max_grad_norm}), or rescale the rewards; also check that the env returns finite "
-            "rewards and observations."
+            f"or max_grad_norm ({self.max_grad_norm}), or rescale the rewards"
         )
+        raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy)
 
     # ------------------------------------------------------------------ logging
 
-    def _reset_keyword_buffers(self) -> None:
-        """Windows of the ``info_keywords`` values of finished episodes (like ``ep_info_buffer``)."""
-        self._ep_keyword_buffers: dict[str, deque[float]] = {
-            key: deque(maxlen=self._stats_window_size) for key in self.info_keywords
-        }
-
-    def _setup_learn(
-        self,
-        total_timesteps: int,
-        callback: MaybeCallback = None,
-        reset_num_timesteps: bool = True,
-        tb_log_name: str = "run",
-        progress_bar: bool = False,
-    ) -> tuple[int, BaseCallback]:
-        if reset_num_timesteps:  # like ep_info_buffer in BaseAlgorithm._setup_learn
-            self._reset_keyword_buffers()
-        return super()._setup_learn(total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar)
-
     def dump_logs(self) -> None:
         """Write log data: SB3's off-policy ``rollout/`` and ``time/`` keys, the info keywords and epsilon."""
-        for key, buffer in self._ep_keyword_buffers.items():
-            if buffer:
-                self.logger.record(f"rollout/ep_{key}_mean", safe_mean(list(buffer)))
+        self._record_keyword_means()
         self.logger.record("rollout/exploration_rate", self.exploration_rate)
         super().dump_logs()
 

@@ -10,6 +10,7 @@ from stable_baselines3.common.torch_layers import create_mlp
 from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
 from torch import nn
 
+from sb3_aac.common.observations import observation_batch
 from sb3_aac.common.spaces import ParameterizedActionSpec
 
 PARAM_BOUNDINGS = ("invert_gradients", "tanh")
@@ -227,20 +228,6 @@ class PDQNPolicy(BasePolicy):
     def _predict(self, observation: PyTorchObs, deterministic: bool = True) -> th.Tensor:
         raise NotImplementedError("A parameterized action is not one tensor: use predict()")
 
-    def observation_batch(self, observation: np.ndarray) -> tuple[np.ndarray, bool]:
-        """``observation`` as a batch ``(n, *obs_shape)``, and whether it was a batch already."""
-        obs = np.asarray(observation)
-        shape = self.observation_space.shape
-        assert shape is not None  # a Box
-        if obs.shape == shape:
-            return obs.reshape(1, *shape), False
-        if obs.shape[1:] == shape:
-            return obs, True
-        raise ValueError(
-            f"Error: Unexpected observation shape {obs.shape} for Box environment, "
-            f"please use {shape} or (n_env, {', '.join(map(str, shape))}) for the observation shape."
-        )
-
     def predict(  # type: ignore[override]
         self,
         observation: np.ndarray,
@@ -256,7 +243,7 @@ class PDQNPolicy(BasePolicy):
             shape ``(n,)`` holding one per observation for a batch; and ``state`` unchanged
         """
         self.set_training_mode(False)
-        obs, vectorized = self.observation_batch(observation)
+        obs, vectorized = observation_batch(observation, self.observation_space)
         with th.no_grad():
             _, params, k = self.greedy(self.features(th.as_tensor(obs, device=self.device)))
         return self.spec.to_env_predicted(k.cpu().numpy(), params.cpu().numpy(), vectorized), state

@@ -4,21 +4,23 @@ import math
 import sys
 import time
 import zipfile
-from collections import deque
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 import torch as th
-from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
 from sb3_aac.common.array_env import array_path
+from sb3_aac.common.divergence import divergence_error
+from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.model_files import check_model_file, check_policy_class
-from sb3_aac.common.tile_coding import TileBank, TileKernel, TileTraces
+from sb3_aac.common.observations import observation_batch
+from sb3_aac.sarsa_aac.kernels import Kernel
+from sb3_aac.sarsa_aac.tile_coding import TileKernel, TileTraces
 from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
@@ -63,7 +65,7 @@ def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator
     return k
 
 
-class SarsaAAC(BaseAlgorithm):
+class SarsaAAC(EpisodeStatsMixin):
     """
     SARSA Actor-Actor-Critic (SARSA-AAC) for parameterized actions: pick one of K action types, then a real-valued
     parameter vector for it.
@@ -96,7 +98,7 @@ class SarsaAAC(BaseAlgorithm):
     bounds. Schedules of progress (exploration and learning rates) are re-evaluated every 0.1% of training
     progress rather than at every step; the episode schedule at every episode end.
 
-    Every approximator takes normalised steps (see :mod:`sb3_aac.common.approximators`): for one sample a learning
+    Every approximator takes normalised steps (see :mod:`sb3_aac.sarsa_aac.approximators`): for one sample a learning
     rate of 1 moves a linear approximator's output onto its target, and for a batch of lanes the summed step is
     divided by a bound on how much the lanes' steps add up, so any rate in ``(0, 1]`` is stable whatever the number
     of lanes or features. Rates are validated to lie in ``(0, 1]``.
@@ -134,7 +136,7 @@ class SarsaAAC(BaseAlgorithm):
     2,100 episodes on every seed, against 3 of 5 seeds by 5,600), but tied on RoboCupDribble-v0 (21.9 vs 21.8 m) and
     navigation (0.996 vs 0.995) and lost on the toy env (8.9 vs 9.3 after 20k steps).
 
-    :param policy: The policy model to use (MlpPolicy, RbfMlpPolicy, RbfPolicy)
+    :param policy: The policy model to use (MlpPolicy, RbfMlpPolicy, RbfPolicy, TilePolicy, or a SarsaAACPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
     :param learning_rate: Critic learning rate (normalised, in ``(0, 1]``), or a schedule of the progress
         remaining (from 1 to 0) whose values at 1 and 0 are in ``(0, 1]``
@@ -165,7 +167,8 @@ class SarsaAAC(BaseAlgorithm):
         number of lanes (with 256 lanes, episodes end at every step, so ``n`` episodes alone would dump at every
         step); 0 dumps every ``n`` episodes, as SB3's DQN does.
     :param tensorboard_log: the log location for tensorboard (if None, no logging)
-    :param policy_kwargs: additional arguments to be passed to the policy on creation (see :class:`SarsaAACPolicy`)
+    :param policy_kwargs: additional arguments to be passed to the policy on creation (see :class:`DenseBankPolicy`
+        for MlpPolicy, RbfMlpPolicy and RbfPolicy, :class:`TilePolicy`)
     :param verbose: Verbosity level: 0 for no output, 1 for info messages (such as device or wrappers used), 2 for
         debug messages
     :param seed: Seed for the pseudo random generators
@@ -184,6 +187,8 @@ class SarsaAAC(BaseAlgorithm):
     # divergence; None until first kept). Set in _reset_train_stats.
     _lane_returns: np.ndarray | None
     _finite_weights: dict[str, th.Tensor] | None
+    # The policy's training kernel, bound when learn() starts.
+    _kernel: Kernel[Any]
 
     def __init__(
         self,
@@ -239,13 +244,8 @@ class SarsaAAC(BaseAlgorithm):
         self.param_noise_final = param_noise_final
         self.trace_lambda = trace_lambda
         self.replacing_traces = replacing_traces
-        # Run-time checks of user input that the annotations cannot guarantee.
-        if isinstance(info_keywords, str) or not all(isinstance(key, str) for key in info_keywords):  # type: ignore[redundant-expr, unreachable]
-            raise ValueError(
-                f"info_keywords must be a tuple of info keys (str), got {info_keywords!r}; "
-                f"for one key write ({info_keywords!r},)"
-            )
-        self.info_keywords = tuple(info_keywords)
+        self._set_info_keywords(info_keywords)
+        # A run-time check of user input that the annotation cannot guarantee.
         if not (isinstance(log_min_timesteps, (int, np.integer)) and log_min_timesteps >= 0):  # type: ignore[redundant-expr]
             raise ValueError(f"log_min_timesteps must be a whole number of env steps >= 0, got {log_min_timesteps!r}")
         self.log_min_timesteps = int(log_min_timesteps)
@@ -299,7 +299,7 @@ class SarsaAAC(BaseAlgorithm):
         # SB3 types policy_class as type[BasePolicy]; __init__ checked that it is a SarsaAACPolicy.
         self.policy = self.policy_class(self.observation_space, self.action_space, **self.policy_kwargs)  # type: ignore[assignment]
         self.policy = self.policy.to(self.device)
-        if self.trace_lambda > 0 and not isinstance(self.policy.approximators, TileBank):
+        if self.trace_lambda > 0 and not isinstance(self.policy, TilePolicy):
             raise ValueError(
                 f"trace_lambda > 0 (got {self.trace_lambda}) needs linear tile heads (TilePolicy); "
                 f"{type(self.policy).__name__} learns with one-step updates only (trace_lambda=0)"
@@ -312,9 +312,6 @@ class SarsaAAC(BaseAlgorithm):
         # Kept when load() calls this after restoring them (0 until the first non-zero reward).
         self._return_moments = getattr(self, "_return_moments", np.zeros(2))
         self.return_scale = getattr(self, "return_scale", 0.0)
-        # Whether the Q and V weights are in return units yet. A model saved before return scaling existed (loaded
-        # with timesteps but without this flag) has trained weights in reward units: they must not be rescaled.
-        self._value_units_set = getattr(self, "_value_units_set", self.num_timesteps > 0)
         self._reset_keyword_buffers()
         self._reset_train_stats()
 
@@ -330,7 +327,6 @@ class SarsaAAC(BaseAlgorithm):
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
             *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
             *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_traces", "_trace_hits"),
-            "_ep_keyword_buffers",
         ]
 
     # ------------------------------------------------------------------ acting
@@ -372,7 +368,7 @@ class SarsaAAC(BaseAlgorithm):
         """
         if deterministic:
             return self.policy.predict(observation, state, episode_start, deterministic=True)
-        obs, vectorized = self.policy.observation_batch(observation)
+        obs, vectorized = observation_batch(observation, self.observation_space)
         out, _ = self.policy.evaluate(obs)
         k, params = self._explore(out)
         return self.policy.actions_from_outputs(out, k, params, vectorized), state
@@ -404,8 +400,6 @@ class SarsaAAC(BaseAlgorithm):
         total_timesteps, callback = self._setup_learn(
             total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
         )
-        if reset_num_timesteps:  # like ep_info_buffer in _setup_learn
-            self._reset_keyword_buffers()
         self._last_dump = (self._episode_num, self.num_timesteps)
         callback.on_training_start(locals(), globals())
         assert self.env is not None
@@ -544,11 +538,10 @@ class SarsaAAC(BaseAlgorithm):
         err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
         err[:, vi] = delta
         if self._traces is None:
-            # The cache comes from the same kernel's forward pass, so its kind matches (mypy cannot pair the unions).
-            kernel.update(cache, err, self._lr, self._hidden_gain)  # type: ignore[arg-type]
+            kernel.update(cache, err, self._lr, self._hidden_gain)
         else:
             assert isinstance(kernel, TileKernel)  # checked in _setup_model
-            kernel.update_traced(cache, err, self._lr, self._trace_hits[k], self._traces)  # type: ignore[arg-type]
+            kernel.update_traced(cache, err, self._lr, self._trace_hits[k], self._traces)
             if any_done:
                 self._traces.clear(np.flatnonzero(dones))
         self._n_updates += 1
@@ -576,10 +569,9 @@ class SarsaAAC(BaseAlgorithm):
         lane_returns[dones] = 0.0
         count, square_sum = self._return_moments
         scale = math.sqrt(square_sum / count)
-        if scale > 0 and not self._value_units_set:
-            self.policy.scale_value_outputs(scale)
-            self._value_units_set = True
         if scale > 0:
+            if self.return_scale == 0:  # the Q and V weights are not in return units yet
+                self.policy.scale_value_outputs(scale)
             self.return_scale = scale
             self._set_return_units()
 
@@ -594,7 +586,7 @@ class SarsaAAC(BaseAlgorithm):
     def _keep_finite_weights(self) -> None:
         """Check the weights and keep a copy of them as the last finite ones (restored on divergence)."""
         self._check_weights()
-        self._finite_weights = {name: p.detach().clone() for name, p in self.policy.approximators.named_parameters()}
+        self._finite_weights = {name: p.detach().clone() for name, p in self.policy.named_parameters()}
         self._finite_weights_timestep = self.num_timesteps
 
     def _on_non_finite_outputs(self, batch: np.ndarray) -> None:
@@ -609,18 +601,12 @@ class SarsaAAC(BaseAlgorithm):
 
     # ------------------------------------------------------------------ statistics and logging
 
-    def _reset_keyword_buffers(self) -> None:
-        """Windows of the ``info_keywords`` values of finished episodes (like ``ep_info_buffer``)."""
-        self._ep_keyword_buffers: dict[str, deque[float]] = {
-            key: deque(maxlen=self._stats_window_size) for key in self.info_keywords
-        }
-
     def _new_traces(self) -> TileTraces | None:
         """Zero eligibility traces of the action-type actor and the critic, one per lane (None if ``trace_lambda == 0``)."""
         if self.trace_lambda == 0:
             return None
         policy = self.policy
-        assert isinstance(policy.approximators, TileBank)  # checked in _setup_model
+        assert isinstance(policy, TilePolicy)  # checked in _setup_model
         columns = np.array([*range(policy.n_types), policy.value_index])
         # hit[k]: the columns whose trace the features of (s, k) set: Q_k and V.
         self._trace_hits = np.concatenate((np.eye(policy.n_types), np.ones((policy.n_types, 1))), axis=1)
@@ -669,7 +655,7 @@ class SarsaAAC(BaseAlgorithm):
         self._type_counts += np.bincount(k, minlength=len(self._type_counts))
 
     def _check_weights(self) -> None:
-        finite = self.policy.approximators.finite_outputs()
+        finite = self.policy.finite_outputs()
         if not finite.all():
             policy = self.policy
             names = []
@@ -686,7 +672,7 @@ class SarsaAAC(BaseAlgorithm):
         restored = "the weights were not restored (no finite copy)"
         if self._finite_weights is not None:
             with th.no_grad():
-                for name, p in self.policy.approximators.named_parameters():
+                for name, p in self.policy.named_parameters():
                     p.copy_(self._finite_weights[name])
             restored = (
                 f"the weights were restored to those of timestep {self._finite_weights_timestep}, "
@@ -694,18 +680,16 @@ class SarsaAAC(BaseAlgorithm):
             )
         self._pending = None  # choose afresh with the restored weights
         self._traces = None
-        raise FloatingPointError(
-            f"SarsaAAC diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}; {restored}. "
+        remedy = (
             f"Lower the learning rates (learning_rate={self.learning_rate}, q_learning_rate={self.q_learning_rate}, "
             f"param_learning_rate={self.param_learning_rate}; normalised rates should be in (0, 1]), lower gamma, "
-            "or rescale the rewards; also check that the env returns finite rewards and observations."
+            "or rescale the rewards"
         )
+        raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy, restored)
 
     def _on_episodes_end(self, dones: np.ndarray, infos: list[Mapping[str, Any]], log_interval: int | None) -> None:
         for i in np.flatnonzero(dones):
-            for key, buffer in self._ep_keyword_buffers.items():
-                if key in infos[i]:
-                    buffer.append(float(infos[i][key]))
+            self._add_episode_keywords(infos[i])
         self._episode_num += int(dones.sum())
         if self.exploration_episodes is not None and self._episode_num <= self.exploration_episodes + len(dones):
             self._update_exploration()
@@ -729,9 +713,7 @@ class SarsaAAC(BaseAlgorithm):
         if len(self.ep_info_buffer) > 0 and len(self.ep_info_buffer[0]) > 0:
             record("rollout/ep_rew_mean", safe_mean([ep_info["r"] for ep_info in self.ep_info_buffer]))
             record("rollout/ep_len_mean", safe_mean([ep_info["l"] for ep_info in self.ep_info_buffer]))
-        for key, buffer in self._ep_keyword_buffers.items():
-            if buffer:
-                record(f"rollout/ep_{key}_mean", safe_mean(list(buffer)))
+        self._record_keyword_means()
         if len(self.ep_success_buffer) > 0:
             record("rollout/success_rate", safe_mean(self.ep_success_buffer))
         record("rollout/exploration_rate", self.exploration_rate)

@@ -41,17 +41,14 @@ torch op runs per step. ``ApproximatorBank.forward`` runs the same numpy code an
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import torch as th
 from torch import nn
 
 from sb3_aac.runtime.forward import BankForward, check_rbf_window
-
-if TYPE_CHECKING:
-    from sb3_aac.common.tile_coding import TileKernel
-    from sb3_aac.runtime.forward import TileForward
+from sb3_aac.sarsa_aac.kernels import ForwardPass, NumpyKernel
 
 # RBFs farther than this many standard deviations from the input are not computed (0): below exp(-12.5) = 3.7e-6.
 DEFAULT_RBF_WINDOW = 5.0
@@ -92,7 +89,7 @@ class NumpyBank(nn.Module):
 
     def __init__(self) -> None:
         super().__init__()
-        self._kernel: BankKernel | TileKernel | None = None
+        self._kernel: NumpyKernel[Any] | None = None
         # load_state_dict copies in place, but the kernel's constants derived from the buffers would go stale.
         self.register_load_state_dict_post_hook(  # type: ignore[no-untyped-call]  # untyped in torch
             lambda module, incompatible_keys: module.invalidate_kernel()
@@ -103,10 +100,12 @@ class NumpyBank(nn.Module):
         # Weights are updated by hand (no autograd); float64 keeps many tiny online steps accurate.
         return nn.Parameter(th.empty(shape, dtype=th.float64).uniform_(-bound, bound), requires_grad=False)
 
-    def _make_kernel(self) -> BankKernel | TileKernel:
+    def _make_kernel(self) -> NumpyKernel[Any]:
+        """The kernel on zero-copy views of this bank's CPU parameters."""
         raise NotImplementedError
 
-    def _forward_pass(self) -> BankForward | TileForward:
+    def _forward_pass(self) -> ForwardPass:
+        """The forward pass on CPU copies of this bank's arrays (for parameters stored on another device)."""
         raise NotImplementedError
 
     def _output_weights(self) -> tuple[th.Tensor, th.Tensor, int]:
@@ -129,7 +128,7 @@ class NumpyBank(nn.Module):
         """:meth:`evaluate` for a tensor ``(n, D)``: a float64 tensor ``(n, A)`` on ``obs``'s device (no autograd)."""
         return th.as_tensor(self.evaluate(obs.detach().cpu().numpy()), device=obs.device)
 
-    def numpy_kernel(self) -> BankKernel | TileKernel:
+    def numpy_kernel(self) -> NumpyKernel[Any]:
         """
         Numpy evaluation and update on zero-copy views of the (CPU) parameters, built once and cached.
 
