@@ -9,8 +9,10 @@ from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
 from tests.helpers import POLICIES
 
-# Faster-than-default rates and wider initial parameter noise for a short run; tuned on seeds 0-2.
+# Wider initial parameter noise for a short run and, for the linear heads, faster-than-default rates (0.3; the
+# hidden layers of the MLP heads learn the toy env with the default 0.1 and not with 0.3 or more); tuned on seeds 0-2.
 HYPERPARAMETERS = dict(learning_rate=0.3, q_learning_rate=0.3, param_learning_rate=0.3, param_noise_initial=0.5)
+MLP_HYPERPARAMETERS = dict(param_noise_initial=0.5)
 
 
 def greedy_return(model, layout="nested"):
@@ -22,7 +24,7 @@ def greedy_return(model, layout="nested"):
 @pytest.mark.parametrize("policy", POLICIES)
 def test_learns_toy_env(policy):
     env = make_vec_env(ParameterizedTargetEnv, n_envs=4, seed=0)
-    model = SarsaAAC(policy, env, seed=0, **HYPERPARAMETERS)
+    model = SarsaAAC(policy, env, seed=0, **(MLP_HYPERPARAMETERS if "Mlp" in policy else HYPERPARAMETERS))
     assert greedy_return(model) < 3.0
     model.learn(20_000)
     assert greedy_return(model) >= 8.5
