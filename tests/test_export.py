@@ -189,7 +189,7 @@ print(sb3_aac.RuntimePolicy is RuntimePolicy)
 
 
 def test_runtime_in_a_numpy_only_venv(tmp_path: Path) -> None:
-    """As the README tells agents: sb3_aac/runtime copied beside an agent, in a fresh venv with numpy alone, acts the same."""
+    """As docs/export-format.md says: sb3_aac/runtime copied beside an agent, in a venv with numpy alone, acts the same."""
     model = randomised_model("RbfPolicy", "nested")
     policy_path = export_policy(model, tmp_path / "agent.aacp")
     obs = observations(model, 200)

@@ -40,3 +40,18 @@ def test_errors(capsys, argv: list[str], message: str) -> None:
     import re
 
     assert re.search(message, run_error(capsys, argv))
+
+
+def test_export_of_a_pdqn_model_is_one_line(tmp_path, capsys) -> None:
+    from robocup_dribble import DribbleVecEnv
+    from sb3_aac import MPDQN
+
+    model = MPDQN("MlpPolicy", DribbleVecEnv(2, profile="v19"), seed=0, learning_starts=20)
+    model.learn(40)
+    model.save(tmp_path / "model.zip")
+    with pytest.raises(SystemExit) as info:
+        main(["export", str(tmp_path / "model.zip"), str(tmp_path / "policy.aacp")])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "cannot export" in err and "MPDQN" in err and "Traceback" not in err
+    assert not (tmp_path / "policy.aacp").exists()

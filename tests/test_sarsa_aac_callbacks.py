@@ -1,72 +1,26 @@
+"""SarsaAAC's own callback and logging behaviour (cadence, stopping, dump keys); what every algorithm does alike is
+in test_logging.py."""
+
 import csv
-import os
 from itertools import pairwise
 
-import numpy as np
 import pytest
-import torch as th
 from stable_baselines3.common.callbacks import (
     BaseCallback,
-    CallbackList,
-    CheckpointCallback,
     EvalCallback,
-    EveryNTimesteps,
-    LogEveryNTimesteps,
     StopTrainingOnMaxEpisodes,
     StopTrainingOnNoModelImprovement,
-    StopTrainingOnRewardThreshold,
 )
 from stable_baselines3.common.env_util import make_vec_env
-from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.logger import configure
 
 from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from tests.helpers import POLICIES
 
 
 class Counter(BaseCallback):
     def _on_step(self) -> bool:
         return True
-
-
-class LocalsCheck(BaseCallback):
-    def _on_step(self) -> bool:
-        for name in ("new_obs", "rewards", "dones", "infos", "actions"):
-            assert name in self.locals, name
-        assert self.locals["new_obs"].shape == (self.training_env.num_envs, 2)
-        assert self.locals["actions"].dtype == object
-        return True
-
-
-@pytest.mark.parametrize("policy", POLICIES)
-def test_callbacks(tmp_path, policy):
-    log_folder = tmp_path / "logs"
-    model = SarsaAAC(policy, ParameterizedTargetEnv(), seed=0)
-    checkpoint = CheckpointCallback(save_freq=100, save_path=str(log_folder), name_prefix="sarsa")
-    eval_env = make_vec_env(ParameterizedTargetEnv, n_envs=1, seed=1)
-    # Stop as soon as the mean reward beats -inf: proves the threshold callback ends training.
-    stop_threshold = StopTrainingOnRewardThreshold(reward_threshold=-np.inf, verbose=1)
-    eval_callback = EvalCallback(
-        eval_env, callback_on_new_best=stop_threshold, best_model_save_path=str(log_folder), eval_freq=100, n_eval_episodes=2
-    )
-    event_counter = Counter()
-    event_callback = EveryNTimesteps(n_steps=50, callback=event_counter)
-    log_callback = LogEveryNTimesteps(n_steps=50)
-
-    model.learn(500, callback=CallbackList([checkpoint, eval_callback, event_callback, log_callback, LocalsCheck()]))
-    # Stopped by the reward threshold at the first evaluation (step 100), not at 500.
-    assert model.num_timesteps == 100
-    assert os.path.exists(log_folder / "sarsa_100_steps.zip")
-    assert os.path.exists(log_folder / "best_model.zip")
-    assert event_counter.n_calls == 2  # at 50 and 100
-    # The evaluation runs after env.step and before that step's update, and stopping skips the update,
-    # so the saved best model is exactly the final one and evaluates to the same mean reward.
-    best = SarsaAAC.load(log_folder / "best_model.zip")
-    for key, value in best.get_parameters()["policy"].items():
-        assert th.equal(value, model.get_parameters()["policy"][key]), key
-    eval_env.seed(1)
-    assert evaluate_policy(best, eval_env, n_eval_episodes=2)[0] == pytest.approx(eval_callback.last_mean_reward)
 
 
 def test_no_model_improvement_and_max_episodes():
@@ -135,13 +89,6 @@ def test_dump_logs_keys(tmp_path):
     assert sum(freqs) == pytest.approx(1.0)
     assert 0.0 <= float(first["train/param_update_fraction"]) <= 1.0
     assert 0.0 <= float(first["rollout/ep_ball_lost_mean"]) <= 1.0
-
-
-def test_log_interval_none_never_dumps(tmp_path):
-    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
-    model.set_logger(configure(str(tmp_path), ["csv"]))
-    model.learn(300, log_interval=None)
-    assert (tmp_path / "progress.csv").read_text() == ""
 
 
 def test_stopping_keeps_the_latest_observation():

@@ -141,7 +141,8 @@ class SarsaAAC(EpisodeStatsMixin):
     2,100 episodes on every seed, against 3 of 5 seeds by 5,600), but tied on RoboCupDribble-v0 (21.9 vs 21.8 m) and
     navigation (0.996 vs 0.995) and lost on the toy env (8.9 vs 9.3 after 20k steps).
 
-    :param policy: The policy model to use (MlpPolicy, RbfMlpPolicy, RbfPolicy, TilePolicy, or a SarsaAACPolicy subclass)
+    :param policy: The policy model to use (TilePolicy, recommended; MlpPolicy, RbfMlpPolicy, RbfPolicy; or a
+        SarsaAACPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
     :param learning_rate: Critic learning rate (normalised, in ``(0, 1]``), or a schedule of the progress
         remaining (from 1 to 0) whose values at 1 and 0 are in ``(0, 1]``
