@@ -9,10 +9,11 @@ from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
 from tests.helpers import POLICIES
 
-# Wider initial parameter noise for a short run and, for the linear heads, faster-than-default rates (0.3; the
-# hidden layers of the MLP heads learn the toy env with the default 0.1 and not with 0.3 or more); tuned on seeds 0-2.
+# Faster-than-default rates and wider initial parameter noise for a short run; tuned on seeds 0-2. The MLP heads take
+# 0.2 (seed 0, return after 20k steps: MLP 9.6 / 9.5 / 7.2 with 0.1 / 0.2 / 0.3, MLP+RBF 6.1 / 9.1 / 9.2 with
+# 0.05 / 0.2 / 0.3).
 HYPERPARAMETERS = dict(learning_rate=0.3, q_learning_rate=0.3, param_learning_rate=0.3, param_noise_initial=0.5)
-MLP_HYPERPARAMETERS = dict(param_noise_initial=0.5)
+MLP_HYPERPARAMETERS = dict(learning_rate=0.2, q_learning_rate=0.2, param_learning_rate=0.2, param_noise_initial=0.5)
 
 
 def greedy_return(model, layout="nested"):
