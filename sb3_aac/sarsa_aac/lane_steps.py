@@ -153,9 +153,9 @@ def tile_steps(w, b, active, err, lr):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True, nogil=True)
-def traced_tile_steps(
+def traced_tile_steps(  # type: ignore[no-untyped-def]
     w, b, active, err, lr, trace_column, hit, decay, replacing, tolerance, trace, bias_trace, listed, live, n_live
-):  # type: ignore[no-untyped-def]
+):
     """
     :func:`tile_steps` with eligibility traces on some columns, in place. Per lane ``i`` in order: its traces decay by
     ``decay`` (features whose traces all fell below ``tolerance`` are dropped), then on its active features and on the
