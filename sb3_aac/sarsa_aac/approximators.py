@@ -29,7 +29,7 @@ one sample at a time:
 - a batch of ``n`` samples (one per lane) is applied one sample after another, in lane order, each sample's error
   recomputed on the weights its predecessors left (:mod:`sb3_aac.sarsa_aac.lane_steps`): ``n`` lanes take the steps
   one lane would take on the same samples, so what a sample teaches does not depend on the number of lanes, and no
-  step overshoots its sample's target for any rate in ``(0, 1]``.
+  linear head's step overshoots its sample's target for any rate in ``(0, 1]``.
 
 The parameters are torch tensors (so SB3's ``state_dict``-based save/load keeps working), but every computation is
 numpy on the CPU: the forward pass is :class:`sb3_aac.runtime.forward.BankForward`, the one implementation of the

@@ -11,8 +11,8 @@ the output before the batch) is applied in lane order ``i = 0 .. n-1``: its erro
   from the weights at the start of the env step (one lane bootstraps each sample from the weights its predecessor
   left): what one sample teaches does not depend on the number of lanes, so the learning curve per env step does not
   either, up to the order and the correlation of the samples;
-- every step is a normalised LMS step on one sample, so it does not overshoot its target for any rate in ``(0, 1]``
-  (a linear head's error on that sample shrinks by the factor ``1 - lr``), whatever ``n``.
+- every step is a normalised step on one sample: a linear head's error on that sample shrinks by the factor
+  ``1 - lr`` (no overshoot for any rate in ``(0, 1]``), whatever ``n``.
 
 ``err_ia == 0`` means "no target": approximator ``a`` skips sample ``i`` (SarsaAAC's Q of the types not taken, and the
 parameter actor where CACLA does not update). The cost is ``O(n * active features * approximators with a target)``:

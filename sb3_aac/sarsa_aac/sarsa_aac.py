@@ -103,8 +103,9 @@ class SarsaAAC(EpisodeStatsMixin):
     applied one after another, each error recomputed on the weights the earlier lanes left
     (:mod:`sb3_aac.sarsa_aac.lane_steps`). So ``n`` lanes take the steps one lane would take on their ``n`` samples
     (the targets bootstrapped from the weights at the start of the env step): a rate means the same per sample
-    whatever the number of lanes, and more lanes buy wall time, not a different learning curve per env step. Rates
-    are validated to lie in ``(0, 1]``.
+    whatever the number of lanes, so the learning curve per env step changes with the lane count only through the
+    order and the correlation of the samples (measured in ``docs/sarsa_aac.md``). Rates are validated to lie in
+    ``(0, 1]``.
 
     Reward units do not matter: ``return_scale`` is the root mean square of the lanes' discounted returns
     (``G <- gamma * G + r``, reset at episode ends) over all steps so far. When it first becomes non-zero, the
