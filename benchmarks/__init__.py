@@ -11,6 +11,9 @@ per finished run, and turns those files into a report with figures (``python -m 
 * :mod:`benchmarks.platform_info`: versions, machine and load recorded in every cell;
 * :mod:`benchmarks.execution`: one cell, and the resumable parallel grid of them;
 * :mod:`benchmarks.engines`: running the cells on Ray (``--engine ray``);
+* :mod:`benchmarks.wall_clock`: the equal wall-clock budget (training stopped after a cell's seconds);
+* :mod:`benchmarks.tuning`: the tuning stage (``--tune``): one equal-size Optuna study per headline learner and env;
+* :mod:`benchmarks.tuned`: the learners' search spaces and their tuned settings (``hyperparams/tuned``);
 * :mod:`benchmarks.reliability`: the reliability test of the best policies;
 * :mod:`benchmarks.run`: the runner's command line;
 * :mod:`benchmarks.groups`: the runs of a config as a group, and the IQM over seeds with its bootstrap interval;
@@ -18,6 +21,7 @@ per finished run, and turns those files into a report with figures (``python -m 
   of improvement) and one-sided tests against targets;
 * :mod:`benchmarks.figures`: the report's figures;
 * :mod:`benchmarks.report_text`: the report's tables and sections;
+* :mod:`benchmarks.report_budgets`: the report's tuned-against-default, per-budget and wall-clock sections;
 * :mod:`benchmarks.report`: ``report.md`` and its figures from a results directory (its command line);
 * :mod:`benchmarks.provenance`: the clean-tree check, each cell's provenance, and the invocation log.
 """

@@ -21,6 +21,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 import torch as th  # noqa: E402
+from stable_baselines3.common.callbacks import BaseCallback, CallbackList  # noqa: E402
 from stable_baselines3.common.logger import configure  # noqa: E402
 
 import robocup_dribble  # noqa: E402, F401  (registers the env ids)
@@ -38,9 +39,13 @@ from benchmarks.presets import (  # noqa: E402
     PEERS,
     SARSA_CONFIGS,
     SARSA_N_ENVS,
+    STEPS_PER_SECOND,
     Cell,
+    is_tuned,
 )
 from benchmarks.provenance import cell_provenance  # noqa: E402
+from benchmarks.tuned import TUNED_PARAMS, TUNING_RECORD, tuned_cell  # noqa: E402
+from benchmarks.wall_clock import TrainingTimeLimit  # noqa: E402
 from benchmarks.zoo_hyperparams import settings  # noqa: E402
 from robocup_dribble.evaluation import evaluate_dribbling  # noqa: E402
 
@@ -54,7 +59,12 @@ def peer_settings(cell: Cell) -> dict[str, Any]:
 
 
 def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
-    """The untrained model, the object evaluation calls ``predict`` on, and the ``log_interval`` for ``learn``."""
+    """The untrained model, the object evaluation calls ``predict`` on, and the ``log_interval`` for ``learn``.
+
+    A tuned config (``<config>-tuned``) builds ``<config>`` with its study's best settings (:mod:`benchmarks.tuned`).
+    """
+    if is_tuned(cell.config):
+        cell = tuned_cell(cell)
     if cell.algo == "SarsaAAC":
         from sb3_aac import SarsaAAC
 
@@ -63,7 +73,8 @@ def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
         env = domains.train_env(cell.env_id, overrides.pop("n_envs", SARSA_N_ENVS), cell.seed)
         if not domains.is_dribbling(cell.env_id):
             overrides.setdefault("info_keywords", ())
-        model = SarsaAAC(policy, env, seed=cell.seed, policy_kwargs=dict(policy_kwargs), **overrides)
+        policy_kwargs = {**policy_kwargs, **overrides.pop("policy_kwargs", {})}
+        model = SarsaAAC(policy, env, seed=cell.seed, policy_kwargs=policy_kwargs, **overrides)
         return model, model, 100  # dump the rollout/train keys every 100 episodes
     if cell.algo in PEERS:
         from sb3_aac import MPDQN, PDQN
@@ -84,6 +95,9 @@ def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
 
 def algo_config(cell: Cell) -> dict[str, Any]:
     """The hyperparameters a cell ran with, as recorded in its file."""
+    if is_tuned(cell.config):
+        tuned = {key: cell.overrides.get(key) for key in (TUNED_PARAMS, TUNING_RECORD)}
+        return {**algo_config(tuned_cell(cell, kwargs_as_text=True)), **tuned, "other": "tuned (benchmarks.tuning)"}
     if cell.algo == "SarsaAAC":
         _, policy, policy_kwargs = SARSA_CONFIGS[cell.config]
         return {
@@ -169,7 +183,9 @@ def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
         model, policy, log_interval = build_model(cell)
         model.set_logger(configure(str(tb_dir), ["tensorboard"]))
         callback = EvalCallback(policy, cell.env_id, cell.eval_every, cell.eval_episodes)
-        model.learn(cell.budget, callback=callback, log_interval=log_interval)
+        limit = TrainingTimeLimit(cell.seconds, callback) if cell.seconds else None
+        callbacks: list[BaseCallback] = [callback, *([limit] if limit else [])]
+        model.learn(cell.budget, callback=CallbackList(callbacks), log_interval=log_interval)
         if callback.curve[-1]["env_steps"] < model.num_timesteps:
             callback.evaluate()  # the curve ends where training ended
         train_wall = time.perf_counter() - start
@@ -192,6 +208,8 @@ def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
             model=str(model_path.relative_to(out_dir)),
             tensorboard=str(tb_dir.relative_to(out_dir)),
         )
+        if limit is not None:
+            result["stopped_by"] = "time" if limit.reached else "env steps"
     result["wall_s"] = round(time.perf_counter() - start, 3)
     result["loadavg"] = {"start": load_start, "end": loadavg()}
     atomic_write_json(cells.cell_path(out_dir, cell.cell_id), result)
@@ -254,18 +272,9 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 
 def estimated_cost(cell: Cell) -> float:
     """Rough seconds of a cell (to start the longest first, so two workers finish together)."""
-    rate = {
-        "SarsaAAC": 5000,
-        "PPO": 1600,
-        "A2C": 2000,
-        "SAC": 250,
-        "TD3": 400,
-        "DDPG": 450,
-        "DQN": 900,
-        "PDQN": 350,
-        "MPDQN": 300,
-    }
-    return 30.0 if cell.algo == "Reference" else cell.budget / rate.get(cell.algo, 1000)
+    if cell.algo == "Reference":
+        return 30.0
+    return float(cell.seconds) if cell.seconds else cell.budget / STEPS_PER_SECOND.get(cell.algo, 1000)
 
 
 def _summary_line(result: dict[str, Any]) -> str:

@@ -13,7 +13,7 @@ import numpy as np
 from scipy import stats
 
 from benchmarks import domains
-from benchmarks.presets import BASELINES, ENV_IDS, PEERS, SARSA_CONFIGS, config_label
+from benchmarks.presets import BASELINES, ENV_IDS, PEERS, SARSA_CONFIGS, base_config, config_label, is_tuned
 from benchmarks.significance import IQM_TRIM, iqm
 
 # The three kinds of learner a user chooses between; a headline pair is the best of two kinds on one env.
@@ -27,10 +27,10 @@ GRID_POINTS = 80
 
 
 class Group:
-    """The runs (seeds) of one env x algorithm x config x budget."""
+    """The runs (seeds) of one env x algorithm x config x budget (env steps, or ``seconds`` of training if > 0)."""
 
-    def __init__(self, env_id: str, algo: str, config: str, budget: int, runs: list[dict[str, Any]]):
-        self.env_id, self.algo, self.config, self.budget = env_id, algo, config, budget
+    def __init__(self, env_id: str, algo: str, config: str, budget: int, runs: list[dict[str, Any]], seconds: int = 0):
+        self.env_id, self.algo, self.config, self.budget, self.seconds = env_id, algo, config, budget, seconds
         self.runs = sorted(runs, key=lambda r: r["cell"]["seed"])
         self.metric = domains.metric(env_id)  # the score that ranks policies on this env
 
@@ -69,18 +69,19 @@ class Group:
 
 def group_results(results: list[dict[str, Any]]) -> tuple[dict[str, list[Group]], dict[str, dict[str, Any]]]:
     """Training groups per env (SarsaAAC configs in the paper's order, then baselines) and references per env."""
-    buckets: dict[tuple[str, str, str, int], list[dict[str, Any]]] = defaultdict(list)
+    buckets: dict[tuple[str, str, str, int, int], list[dict[str, Any]]] = defaultdict(list)
     references = {}
     for r in results:
         c = r["cell"]
         if c["algo"] == "Reference":
             references[c["env_id"]] = r
         elif "final" in r:
-            buckets[(c["env_id"], c["algo"], c["config"], c["budget"])].append(r)
+            buckets[(c["env_id"], c["algo"], c["config"], c["budget"], c.get("seconds", 0))].append(r)
     order = {name: i for i, name in enumerate([*SARSA_CONFIGS, *(a.lower() for a in (*PEERS, *BASELINES))])}
     groups: dict[str, list[Group]] = defaultdict(list)
-    for key in sorted(buckets, key=lambda k: (k[0], order.get(k[2], 99), k[3])):
-        groups[key[0]].append(Group(*key, buckets[key]))
+    for key in sorted(buckets, key=lambda k: (k[0], k[4], order.get(base_config(k[2]), 99), is_tuned(k[2]), k[3])):
+        env_id, algo, config, budget, seconds = key
+        groups[env_id].append(Group(env_id, algo, config, budget, buckets[key], seconds))
     env_order = [e for e in ENV_IDS if e in groups or e in references] + sorted(set(groups) - set(ENV_IDS))
     return {e: groups.get(e, []) for e in env_order}, references
 

@@ -33,8 +33,14 @@ from robocup_dribble import ENV_PROFILES
 
 DRIBBLE_IDS = ("RoboCupDribblePaper-v0", "RoboCupDribble-v0")  # the paper's era first
 PLATFORM_ID = "Platform-v0"
-ENV_IDS = (*DRIBBLE_IDS, PLATFORM_ID)
-ENV_SHORT = {"RoboCupDribblePaper-v0": "paper", "RoboCupDribble-v0": "v19", PLATFORM_ID: "platform"}
+HYBRID_IDS = ("Goal-v0", "Moving-v0", "Sliding-v0", "CatchPoint-v0")  # envs/hybrid_domains (benchmarks.domains)
+ENV_IDS = (*DRIBBLE_IDS, PLATFORM_ID, *HYBRID_IDS)
+ENV_SHORT = {
+    "RoboCupDribblePaper-v0": "paper",
+    "RoboCupDribble-v0": "v19",
+    PLATFORM_ID: "platform",
+    **{env_id: env_id.split("-")[0].lower() for env_id in HYBRID_IDS},
+}
 
 # Evaluation seeds: with common random numbers every policy meets the same episodes of a set (episode slot j of a
 # set plays its own seeded player, start and noise, or Platform's own seeded episode), and none of them is shared with
@@ -122,6 +128,32 @@ BASELINES: dict[str, dict[str, Any]] = {
 }
 ON_POLICY = ("PPO", "A2C")
 
+# Rough env steps per second of training on one core, per algorithm (measured on the development machine at the
+# settings above): the local pool starts the longest cells first, and a wall-clock cell's schedule horizon is what
+# its learner steps in its seconds.
+STEPS_PER_SECOND = {
+    "SarsaAAC": 5000,
+    "PPO": 1600,
+    "A2C": 2000,
+    "SAC": 250,
+    "TD3": 400,
+    "DDPG": 450,
+    "DQN": 900,
+    "PDQN": 350,
+    "MPDQN": 300,
+}
+
+TUNED_SUFFIX = "-tuned"  # a config "<config>-tuned" runs <config> with the settings of its tuning study
+
+
+def base_config(config: str) -> str:
+    """The config a tuned config was tuned from (``"td3-tuned"`` -> ``"td3"``); other configs are their own."""
+    return config.removesuffix(TUNED_SUFFIX)
+
+
+def is_tuned(config: str) -> bool:
+    return config.endswith(TUNED_SUFFIX)
+
 
 @dataclass(frozen=True)
 class Cell:
@@ -129,25 +161,28 @@ class Cell:
 
     env_id: str
     algo: str  # "SarsaAAC", a key of BASELINES, or "Reference"
-    config: str  # a key of SARSA_CONFIGS for SarsaAAC, the algo name in lower case for baselines
+    config: str  # a key of SARSA_CONFIGS for SarsaAAC, the algo name in lower case for baselines; +TUNED_SUFFIX
     seed: int = 0
-    budget: int = 0  # env steps of training
+    budget: int = 0  # env steps of training (a wall-clock cell: at most; its schedules' horizon)
     eval_every: int = 500  # training episodes between two evaluations of the learning curve
     eval_episodes: int = 100  # greedy episodes per curve point (EVAL_SEED)
     final_episodes: int = 1000  # greedy episodes of the final evaluation (FINAL_SEED)
-    overrides: dict[str, Any] = field(default_factory=dict)  # extra algorithm kwargs (tests, experiments)
+    # extra algorithm kwargs (tests, experiments); a tuned config's are {"tuned_params": the best trial's parameters}
+    overrides: dict[str, Any] = field(default_factory=dict)
+    seconds: int = 0  # > 0: a wall-clock cell, training stops after this many seconds of training (evaluations excluded)
 
     @property
     def cell_id(self) -> str:
         env = ENV_SHORT.get(self.env_id, self.env_id)
         if self.algo == "Reference":  # its evaluation sizes differ between presets
             return f"{env}__reference__e{self.eval_episodes}-f{self.final_episodes}"
-        return f"{env}__{self.algo}-{self.config}__s{self.seed}__{budget_label(self.budget)}"
+        budget = f"{self.seconds}s" if self.seconds else budget_label(self.budget)
+        return f"{env}__{self.algo}-{self.config}__s{self.seed}__{budget}"
 
     @property
     def family(self) -> str:
         if self.algo == "SarsaAAC":
-            return SARSA_CONFIGS[self.config][0]
+            return SARSA_CONFIGS[base_config(self.config)][0]
         if self.algo in PEERS:
             return "peer"
         return "reference" if self.algo == "Reference" else "baseline"
@@ -158,7 +193,11 @@ class Cell:
         return ENV_PROFILES.get(self.env_id)
 
     def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
+        """The fields as a dict; ``seconds`` only for a wall-clock cell (so env-step cells read as they always did)."""
+        data = asdict(self)
+        if not self.seconds:
+            del data["seconds"]
+        return data
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Cell:
@@ -173,7 +212,8 @@ def budget_label(steps: int) -> str:
 
 
 def config_label(algo: str, config: str) -> str:
-    return CONFIG_LABELS.get(config, algo) if algo == "SarsaAAC" else algo
+    label = CONFIG_LABELS.get(base_config(config), algo) if algo == "SarsaAAC" else algo
+    return f"{label}, tuned" if is_tuned(config) else label
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -194,6 +234,15 @@ QUICK: dict[str, Any] = {
     "eval_every": 500,
     "eval_episodes": 100,
     "final_episodes": 300,
+    # CI-sized studies (benchmarks.tuning): 3 trials of 5,000 env steps, one tuning seed, 2 pruning evaluations.
+    "tuning": {
+        "learners": [("SarsaAAC", "tile"), ("SarsaAAC", "mlp2"), ("PPO", "ppo")],
+        "trials": 3,
+        "seeds": 1,
+        "env_steps": 5_000,
+        "evaluations": 2,
+        "eval_episodes": 20,
+    },
 }
 
 HEADLINE_SEEDS = tuple(range(10))  # the best of each family on each env: >= 10 seeds (benchmarks.significance)
@@ -211,18 +260,68 @@ _DRIBBLE_RUNS = [
     ("MPDQN", "mpdqn", HEADLINE_SEEDS),
     ("TD3", "td3", HEADLINE_SEEDS),
 ]
+_PLATFORM_HEADLINE = [("SarsaAAC", "tile"), ("MPDQN", "mpdqn"), ("PPO", "ppo")]
+# Equal wall-clock budget: the headline learners train for the same seconds of one core, evaluations excluded
+# (benchmarks.wall_clock); 120 s is about the time TD3 needs for the 50k-step budget, and 60x SarsaAAC's.
+WALL_CLOCK_SECONDS = 120
+WALL_CLOCK_SEEDS = PAPER_SEEDS
+# The long budget of the dribbling envs, sized for the paper's episode counts: on the paper env (seed 0, 16 lanes)
+# SarsaAAC's TilePolicy passed 10,000 episodes at 99k env steps and 20,000 at 354k; MlpPolicy (2 hidden) 10,000 at
+# 32k and 40,000 at 471k. 500k env steps therefore test the 10,000-episode claims and the 40,000-episode one.
+LONG_BUDGET = 500_000
+LONG_SEEDS = PAPER_SEEDS
+# Tuning (benchmarks.tuning): one study per headline learner and env, all the same size: 20 trials x the env's
+# budget x 1 tuning seed, the trial pruned by the median rule on 5 greedy evaluations of 50 episodes.
+FULL_TUNING: dict[str, Any] = {
+    "learners": None,
+    "trials": 20,
+    "seeds": 1,
+    "env_steps": None,
+    "evaluations": 5,
+    "eval_episodes": 50,
+}
+
+
+def _tuned(learners: list[tuple[str, str]], seeds: tuple[int, ...]) -> list[tuple[str, str, tuple[int, ...]]]:
+    return [(algo, config + TUNED_SUFFIX, seeds) for algo, config in learners]
+
+
+def _headline(runs: list[tuple[str, str, tuple[int, ...]]]) -> list[tuple[str, str]]:
+    return [(algo, config) for algo, config, seeds in runs if len(seeds) >= len(HEADLINE_SEEDS)]
+
+
 FULL: dict[str, Any] = {
     "envs": {
         "RoboCupDribblePaper-v0": {
             "budget": 50_000,
             "runs": [
                 *_DRIBBLE_RUNS,
+                *_tuned(_headline(_DRIBBLE_RUNS), HEADLINE_SEEDS),
                 *(("SarsaAAC", config, PAPER_SEEDS) for config in ("rbf50", "rbfmlp2", "mlp2")),
                 ("PDQN", "pdqn", FEW_SEEDS),
                 *((algo, algo.lower(), FEW_SEEDS) for algo in ("SAC", "DDPG", "DQN", "PPO", "A2C")),
             ],
+            "long": {
+                "budget": LONG_BUDGET,
+                "runs": [
+                    *((algo, config, LONG_SEEDS) for algo, config in _headline(_DRIBBLE_RUNS)),
+                    *(("SarsaAAC", config, LONG_SEEDS) for config in ("rbf50", "rbfmlp2", "mlp2")),
+                ],
+            },
+            "wall_clock": {
+                "seconds": WALL_CLOCK_SECONDS,
+                "runs": [(algo, config, WALL_CLOCK_SEEDS) for algo, config in _headline(_DRIBBLE_RUNS)],
+            },
         },
-        "RoboCupDribble-v0": {"budget": 50_000, "runs": _DRIBBLE_RUNS},
+        "RoboCupDribble-v0": {
+            "budget": 50_000,
+            "runs": [*_DRIBBLE_RUNS, *_tuned(_headline(_DRIBBLE_RUNS), HEADLINE_SEEDS)],
+            "long": {"budget": LONG_BUDGET, "runs": [(a, c, LONG_SEEDS) for a, c in _headline(_DRIBBLE_RUNS)]},
+            "wall_clock": {
+                "seconds": WALL_CLOCK_SECONDS,
+                "runs": [(algo, config, WALL_CLOCK_SEEDS) for algo, config in _headline(_DRIBBLE_RUNS)],
+            },
+        },
         PLATFORM_ID: {
             "budget": 20_000,
             "runs": [
@@ -231,9 +330,15 @@ FULL: dict[str, Any] = {
                 ("PDQN", "pdqn", FEW_SEEDS),
                 ("TD3", "td3", FEW_SEEDS),
                 ("PPO", "ppo", HEADLINE_SEEDS),  # the best SB3 baseline on Platform in a first 3-seed run (0.42)
+                *_tuned(_PLATFORM_HEADLINE, HEADLINE_SEEDS),
             ],
+            "wall_clock": {
+                "seconds": WALL_CLOCK_SECONDS,
+                "runs": [(algo, config, WALL_CLOCK_SEEDS) for algo, config in _PLATFORM_HEADLINE],
+            },
         },
     },
+    "tuning": FULL_TUNING,
     "eval_every": 500,
     "eval_episodes": 100,
     "final_episodes": 1000,
@@ -254,7 +359,32 @@ def build_cells(preset: str | dict[str, Any]) -> list[Cell]:
     for env_id, spec in p["envs"].items():
         for algo, config, seeds in spec["runs"]:
             cells += [Cell(env_id, algo, config, seed, spec["budget"], **common) for seed in seeds]
+        if "long" in spec:  # a longer env-step budget for some learners
+            for algo, config, seeds in spec["long"]["runs"]:
+                cells += [Cell(env_id, algo, config, seed, spec["long"]["budget"], **common) for seed in seeds]
+        if "wall_clock" in spec:  # equal seconds of training; the env-step horizon is what the learner steps in them
+            seconds = spec["wall_clock"]["seconds"]
+            for algo, config, seeds in spec["wall_clock"]["runs"]:
+                horizon = STEPS_PER_SECOND[algo] * seconds
+                cells += [Cell(env_id, algo, config, seed, horizon, **common, seconds=seconds) for seed in seeds]
     return cells
+
+
+def tuning_spec(preset: str | dict[str, Any]) -> dict[str, Any]:
+    """A preset's tuning budget (benchmarks.tuning): ``learners`` per env id (None in the preset: the headline learners,
+    the runs with :data:`HEADLINE_SEEDS`), ``trials``, ``seeds``, ``env_steps`` per env id (None: the env's budget),
+    ``evaluations`` and ``eval_episodes``."""
+    p = PRESETS[preset] if isinstance(preset, str) else preset
+    if "tuning" not in p:
+        raise ValueError("this preset has no tuning budget (a 'tuning' entry)")
+    spec = dict(p["tuning"])
+    learners, steps = spec["learners"], spec["env_steps"]
+    spec["learners"] = {
+        env_id: list(learners) if learners is not None else _headline([r for r in env["runs"] if not is_tuned(r[1])])
+        for env_id, env in p["envs"].items()
+    }
+    spec["env_steps"] = {env_id: env["budget"] if steps is None else steps for env_id, env in p["envs"].items()}
+    return spec
 
 
 def select(cells: list[Cell], patterns: str | None) -> list[Cell]:

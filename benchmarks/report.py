@@ -26,10 +26,10 @@ from benchmarks import cells
 from benchmarks.figures import FAMILY_FIGURES, FAMILY_TITLES, best_figure, family_figure, final_figure, reliability_figure
 from benchmarks.groups import group_results
 from benchmarks.presets import PAPER_FAMILIES
+from benchmarks.report_budgets import budget_verdicts, split_views, tuned_section, wall_clock_section
 from benchmarks.report_text import (
     cost_table,
     env_title,
-    headline_verdicts,
     method_section,
     paper_claims,
     performance_table,
@@ -64,7 +64,8 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
     """
     out = Path(out)
     results, reliability, damaged = read_inputs(out)
-    groups, references = group_results(results)
+    every_group, references = group_results(results)
+    groups, clock_groups = split_views(every_group)  # env-step budgets; equal wall-clock budgets
     if figures:
         family_figs = {f: family_figure(out, f, groups, references) for f in PAPER_FAMILIES}
         best = best_figure(out, groups, references)
@@ -86,7 +87,7 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         "",
         "## Summary",
         "",
-        *(headline_verdicts(groups, references) or ["- No env has SarsaAAC cells."]),
+        *(budget_verdicts(groups, references) or ["- No env has SarsaAAC cells."]),
         "",
         "### The paper's figures against ours",
         "",
@@ -97,6 +98,8 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         "one learner, ours come from 16 lanes learning together.",
         "",
     ]
+    lines += tuned_section(groups)
+    lines += wall_clock_section(clock_groups)
     lines += setup_section(out, results, groups, reliability)
     lines += method_section(results)
     lines += ["## Results per env (Table 1 of the paper, extended)", ""]

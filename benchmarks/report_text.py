@@ -330,12 +330,12 @@ def _interval(pair: tuple[float, float], digits: int = 1) -> str:
     return f"[{pair[0]:.{digits}f}, {pair[1]:.{digits}f}]"
 
 
-def _comparison_text(c: Any, a: str, b: str, unit: str, digits: int) -> str:
+def comparison_text(c: Any, a: str, b: str, unit: str, digits: int) -> str:
     verdict = {
         "A better": f"**{a} better**",
         "B better": f"**{b} better**",
         "no significant difference": "no significant difference",
-        "too few seeds": f"no verdict (fewer than {MIN_SEEDS} seeds on a side)",
+        "too few seeds": f"no verdict (fewer than {c.min_seeds} seeds on a side)",
     }[c.outcome]
     return (
         f"{verdict} (Welch p = {c.welch_p:.3g}, n = {c.n_a} vs {c.n_b}; {a} - {b}: means "
@@ -345,39 +345,39 @@ def _comparison_text(c: Any, a: str, b: str, unit: str, digits: int) -> str:
     )
 
 
-def headline_pair(gs: list[Group], kind: str) -> Group | None:
+def headline_pair(gs: list[Group], kind: str, min_seeds: int = MIN_SEEDS) -> Group | None:
     """The best group of a kind of learner (:data:`KINDS`) among those with enough seeds for a verdict (else the best)."""
     algos = KINDS[kind]
-    return best_group(gs, algos, min_seeds=MIN_SEEDS) or best_group(gs, algos)
+    return best_group(gs, algos, min_seeds=min_seeds) or best_group(gs, algos)
 
 
-def headline_verdicts(groups: dict[str, list[Group]], references: dict[str, Any]) -> list[str]:
+def headline_verdicts(groups: dict[str, list[Group]], references: dict[str, Any], min_seeds: int = MIN_SEEDS) -> list[str]:
     """Per env: the best SarsaAAC config against the best of each other kind of learner, at equal env steps and at
     equal training seconds, and against the references (the hand-coded dribbler on the same episodes, or Platform's
-    published figures)."""
+    published figures). Give the groups of one env-step budget per env; verdicts need ``min_seeds`` a side."""
     lines = []
     for env_id, gs in groups.items():
-        sarsa = headline_pair(gs, "SarsaAAC")
+        sarsa = headline_pair(gs, "SarsaAAC", min_seeds)
         if sarsa is None:
             continue
         unit, digits = (" m", 1) if domains.is_dribbling(env_id) else ("", 3)
         a = f"SarsaAAC {sarsa.config}"
         lines.append(
-            f"- **{env_id}**: best SarsaAAC config, {sarsa.label}: {fmt_ci(sarsa.final(), digits)}{unit} "
-            f"({len(sarsa.runs)} seeds)."
+            f"- **{env_id}** ({sarsa.budget:,} env steps): best SarsaAAC config, {sarsa.label}: "
+            f"{fmt_ci(sarsa.final(), digits)}{unit} ({len(sarsa.runs)} seeds)."
         )
         for kind in ("parameterized peer", "SB3 baseline"):
-            other = headline_pair(gs, kind)
+            other = headline_pair(gs, kind, min_seeds)
             if other is None:
                 continue
             b = other.label
-            steps = compare(sarsa.final(), other.final())
+            steps = compare(sarsa.final(), other.final(), min_seeds=min_seeds)
             seconds = min(float(np.mean(sarsa.values("train_wall_s"))), float(np.mean(other.values("train_wall_s"))))
-            timed = compare(sarsa.at("train_s", seconds), other.at("train_s", seconds))
+            timed = compare(sarsa.at("train_s", seconds), other.at("train_s", seconds), min_seeds=min_seeds)
             lines.append(
                 f"  - vs the best {kind}, {b} ({fmt_ci(other.final(), digits)}{unit}, {len(other.runs)} seeds): at equal "
-                f"env steps ({sarsa.budget:,}) {_comparison_text(steps, a, b, unit, digits)}; at equal training time "
-                f"({seconds:.0f} s, the shorter run's; curves interpolated) {_comparison_text(timed, a, b, unit, digits)}."
+                f"env steps ({sarsa.budget:,}) {comparison_text(steps, a, b, unit, digits)}; at equal training time "
+                f"({seconds:.0f} s, the shorter run's; curves interpolated) {comparison_text(timed, a, b, unit, digits)}."
             )
             untested = [
                 g.label
@@ -389,21 +389,21 @@ def headline_verdicts(groups: dict[str, list[Group]], references: dict[str, Any]
         ref = references.get(env_id)
         if ref is not None:
             hand = ref["references"]["handcoded"]["final"]["distance_mean"]
-            check = target_verdict(sarsa.final(), hand, min_seeds=MIN_SEEDS)
+            check = target_verdict(sarsa.final(), hand, min_seeds=min_seeds)
             lines.append(
                 f"  - vs the hand-coded dribbler on the same {ref['references']['handcoded']['final']['episodes']:,} "
-                f"episodes ({hand:.1f} m): {_target_text(check.outcome, MIN_SEEDS)} (one-sided t-test that SarsaAAC's "
+                f"episodes ({hand:.1f} m): {_target_text(check.outcome, min_seeds)} (one-sided t-test that SarsaAAC's "
                 f"mean {check.mean:.1f} m is at least {hand:.1f} m: p = {check.p_value:.3g})."
             )
         if not domains.is_dribbling(env_id):
             for name, value, cite in domains.PLATFORM_REFERENCES[:1]:
-                for g in (sarsa, headline_pair(gs, "parameterized peer")):
+                for g in (sarsa, headline_pair(gs, "parameterized peer", min_seeds)):
                     if g is None:
                         continue
-                    check = target_verdict(g.final(), value, min_seeds=MIN_SEEDS)
+                    check = target_verdict(g.final(), value, min_seeds=min_seeds)
                     lines.append(
                         f"  - {g.label} against {name}'s published {value} ({cite}): "
-                        f"{_target_text(check.outcome, MIN_SEEDS)} (mean {check.mean:.3f}, one-sided p = {check.p_value:.3g})."
+                        f"{_target_text(check.outcome, min_seeds)} (mean {check.mean:.3f}, one-sided p = {check.p_value:.3g})."
                     )
     return lines
 

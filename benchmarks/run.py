@@ -5,6 +5,7 @@ Usage::
     python -m benchmarks.run --preset quick|full [--out DIR] [--workers 2] [--only PATTERN[,PATTERN...]]
                              [--engine local|ray [--address ADDR]] [--allow-dirty]
     python -m benchmarks.run --reliability [--out DIR]      # the reliability test of the best policies
+    python -m benchmarks.run --tune --preset P [--trials N] [--storage JOURNAL_OR_URL] [--only ...] [--engine ...]
     python -m benchmarks.report DIR                         # report.md and figures from the cell files
 
 Each cell (env id x algorithm x config x seed x budget, see :mod:`benchmarks.presets`) trains through SB3's
@@ -24,6 +25,10 @@ every cell's files (:mod:`benchmarks.engines`).
 A sweep refuses to start when tracked files have uncommitted changes, unless ``--allow-dirty`` (recorded in every
 cell with the commit, :mod:`benchmarks.provenance`); ``DIR/runs.jsonl`` logs every invocation when it starts and
 when it ends, interrupted ones too.
+
+``--tune`` runs the tuning stage instead of the grid (:mod:`benchmarks.tuning`): one Optuna study per tuned learner
+and env of the preset, their best settings written to ``hyperparams/tuned/<env id>/<learner>.yml`` (``--tuned-dir``
+another folder), which the grid's ``<config>-tuned`` cells read.
 """
 
 from __future__ import annotations
@@ -42,7 +47,7 @@ from typing import Any
 
 from benchmarks import cells
 from benchmarks.engines import RayEngine
-from benchmarks.presets import PRESETS, build_cells, select
+from benchmarks.presets import PRESETS, Cell, build_cells, select
 from benchmarks.provenance import (
     ENV_VAR,
     REPO,
@@ -53,6 +58,8 @@ from benchmarks.provenance import (
     require_clean_tree,
 )
 from benchmarks.reliability import RELIABILITY_PLAYERS, run_reliability
+from benchmarks.tuned import TUNED_DIR_VAR, resolve_tuned, tuned_dir
+from benchmarks.tuning import plan_studies, run_tuning
 from sb3_aac.common.output_files import check_writable_dir
 
 
@@ -93,12 +100,22 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="run although tracked files have uncommitted changes (recorded in each cell)",
     )
+    parser.add_argument("--tune", action="store_true", help="run the preset's tuning stage (not the grid)")
+    parser.add_argument("--trials", type=_positive_int, default=None, help="finished trials per study (default: the preset's)")
+    parser.add_argument(
+        "--storage",
+        default=None,
+        help="one Optuna journal file or database URL for all studies (default: a journal per study)",
+    )
+    parser.add_argument("--tuned-dir", default=None, help="folder of the tuned settings (default: hyperparams/tuned)")
     args = parser.parse_args(argv)
     signal.signal(signal.SIGTERM, _exit_on_sigterm)  # `kill` runs the cleanup of run_grid (workers end with us)
     if not args.preset and not args.reliability:
         parser.error("give --preset (run the grid) and/or --reliability")
     if args.address and args.engine != "ray":
         parser.error("--address needs --engine ray")
+    if _tuning_arguments(parser, args):
+        return tune(parser, args)
     out = Path(args.out or f"runs/bench-{args.preset or 'full'}")
     if not args.list:
         try:
@@ -113,6 +130,7 @@ def main(argv: list[str] | None = None) -> int:
         grid = select(every, args.only)
         if not grid:
             parser.error(f"--only {args.only!r} matches none of the {len(every)} cells of preset {args.preset!r} (see --list)")
+        grid = _with_tuned_settings(grid)
         if args.list:
             for cell in grid:
                 print(f"{'done' if cells.is_finished(out, cell) else 'todo'}  {cell.cell_id}")
@@ -152,6 +170,49 @@ def main(argv: list[str] | None = None) -> int:
         run_reliability(out, args.players)
         print(f"reliability test written to {out / 'reliability.json'}")
     return 1 if args.preset and status["failed"] else 0
+
+
+def _with_tuned_settings(grid: list[Cell]) -> list[Cell]:
+    """The grid's tuned cells with their settings (:func:`benchmarks.tuned.resolve_tuned`); exits (2) if some lack them."""
+    try:
+        return resolve_tuned(grid)
+    except ValueError as error:
+        print(f"refused: {error}; or leave the tuned cells out with --only", file=sys.stderr)
+        raise SystemExit(2) from None
+
+
+def _tuning_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -> bool:
+    """Check the tuning options and make ``--tuned-dir`` the cells' folder of tuned settings; whether to tune."""
+    if (args.trials or args.storage) and not args.tune:
+        parser.error("--trials and --storage belong to --tune")
+    if args.tuned_dir:
+        os.environ[TUNED_DIR_VAR] = str(Path(args.tuned_dir).resolve())  # read by the cells, here and in Ray tasks
+    return bool(args.tune)
+
+
+def tune(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """The tuning stage: every argument, the tuned folder and every study's storage checked before any trial runs."""
+    if args.reliability or args.list:
+        parser.error("--tune runs only the tuning stage (no --reliability or --list)")
+    try:
+        studies = plan_studies(args.preset, args.trials, args.only)
+        folder = check_writable_dir(tuned_dir(), "--tuned-dir")
+    except ValueError as error:
+        parser.error(str(error))
+    engine = RayEngine(args.address, num_cpus=args.workers) if args.engine == "ray" else None
+    start = time.time()
+    try:
+        if engine is not None:
+            engine.check_address()
+        status = run_tuning(studies, args.storage, folder, args.workers, engine)
+    except (ValueError, ConnectionError) as error:
+        print(f"refused: {error}", file=sys.stderr)
+        return 2
+    print(f"{len(status['done'])} studies tuned, {len(status['failed'])} failed in {time.time() - start:.0f} s; "
+          f"tuned settings in {folder}")  # fmt: skip
+    if status["failed"]:
+        print("failed (no trial finished in a round): " + ", ".join(status["failed"]))
+    return 1 if status["failed"] else 0
 
 
 if __name__ == "__main__":

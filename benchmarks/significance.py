@@ -27,6 +27,8 @@ from typing import Any, Literal
 import numpy as np
 from scipy import stats
 
+from sb3_aac.common.statistics import welch_test
+
 MIN_SEEDS = 10  # seeds per side below which no comparison or target verdict is given (headline pairs)
 ALPHA = 0.05
 BOOTSTRAP_RESAMPLES = 10_000
@@ -97,22 +99,6 @@ def _check_alpha(alpha: float) -> None:
 def iqm(values: np.ndarray, axis: int = -1) -> np.ndarray:
     """Interquartile mean along ``axis``: the mean after cutting :data:`IQM_TRIM` of the values at each end."""
     return np.asarray(stats.trim_mean(values, IQM_TRIM, axis=axis))
-
-
-def welch_test(a: Any, b: Any) -> tuple[float, float]:
-    """Welch's two-sided t-test of mean(a) = mean(b): ``(t, p)``; ``scipy.stats.ttest_ind(equal_var=False)``.
-
-    When both samples have zero variance scipy gives NaN; then the means either agree (``t = 0, p = 1``) or differ
-    with no noise at all (``t = +-inf, p = 0``).
-    """
-    a, b = _scores(a, "a"), _scores(b, "b")
-    if len(a) < 2 or len(b) < 2:
-        raise ValueError(f"Welch's test needs at least 2 scores per side, got {len(a)} and {len(b)}")
-    if np.ptp(a) == 0 and np.ptp(b) == 0:
-        diff = a[0] - b[0]
-        return (0.0, 1.0) if diff == 0 else (float(np.sign(diff) * np.inf), 0.0)
-    result = stats.ttest_ind(a, b, equal_var=False)
-    return float(result.statistic), float(result.pvalue)
 
 
 def probability_of_improvement(a: Any, b: Any) -> float:

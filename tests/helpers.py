@@ -10,7 +10,7 @@ from gymnasium import spaces
 
 from sb3_aac import MPDQN, PDQN, SarsaAAC
 
-POLICIES = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy"]
+POLICIES = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy", "DeepPolicy"]
 LAYOUTS = ["nested", "flat", "shared", "oneof"]
 # P-DQN / MP-DQN small and fast: learning from step 50 on minibatches of 16, one hidden layer of 16.
 PDQN_SMALL = dict(learning_starts=50, batch_size=16, policy_kwargs=dict(net_arch=[16]))
@@ -26,6 +26,7 @@ class Algo:
     kwargs: dict[str, Any] = field(default_factory=dict)  # small, fast settings for tests
     own_tags: tuple[str, ...] = ()  # the log keys of its own (besides tests/test_logging.py's COMMON_TAGS)
     log_often: dict[str, Any] = field(default_factory=dict)  # settings under which log_interval alone sets the dumps
+    exported: bool = False  # whether ``sb3-aac train --out`` also writes the policy as a .aacp file
 
     @property
     def id(self) -> str:
@@ -44,8 +45,8 @@ _PDQN_TAGS = ("train/actor_loss", "train/learning_rate", "train/actor_learning_r
 ALGOS = [
     # RbfPolicy first: the SarsaAAC case of ALGO_CLASSES.
     *(
-        Algo(SarsaAAC, name, "sarsa_aac", own_tags=_SARSA_AAC_TAGS, log_often=dict(log_min_timesteps=0))
-        for name in ("RbfPolicy", "MlpPolicy", "RbfMlpPolicy", "TilePolicy")
+        Algo(SarsaAAC, name, "sarsa_aac", own_tags=_SARSA_AAC_TAGS, log_often=dict(log_min_timesteps=0), exported=True)
+        for name in ("RbfPolicy", "MlpPolicy", "RbfMlpPolicy", "TilePolicy", "DeepPolicy")
     ),
     Algo(PDQN, "MlpPolicy", "pdqn", PDQN_SMALL, _PDQN_TAGS),
     Algo(MPDQN, "MlpPolicy", "mpdqn", PDQN_SMALL, _PDQN_TAGS),

@@ -13,7 +13,7 @@ import robocup_dribble
 from benchmarks import cells as cell_files
 from benchmarks import run as bench_run
 from benchmarks.adapters import DiscreteActionAdapter, FlatActionAdapter, baseline_env, env_action_space
-from benchmarks.presets import Cell, build_cells, select
+from benchmarks.presets import LONG_BUDGET, WALL_CLOCK_SECONDS, Cell, build_cells, is_tuned, select
 from benchmarks.report import build_report
 from benchmarks.significance import MIN_SEEDS
 from sb3_aac import DiscretizeParameterizedAction, FlattenParameterizedAction
@@ -233,9 +233,20 @@ def test_presets_are_well_formed():
         for algo, config in (("SarsaAAC", "tile"), ("MPDQN", "mpdqn")):
             assert len({c.seed for c in full if (c.env_id, c.algo, c.config) == (env_id, algo, config)}) >= MIN_SEEDS
     assert min(len({c.seed for c in full if c.config == k}) for k in ("rbf50", "mlp2", "rbfmlp2")) >= 5
-    # every learner of an env gets the same env-step budget
+    # every learner of an env's main view gets the same env-step budget, and has a tuned twin
     for env_id in {c.env_id for c in full}:
-        assert len({c.budget for c in full if c.algo != "Reference" and c.env_id == env_id}) == 1
+        trained = [c for c in full if c.algo != "Reference" and c.env_id == env_id and not c.seconds]
+        main = min(c.budget for c in trained)
+        assert {c.budget for c in trained} <= {main, LONG_BUDGET}
+        at_main = [c for c in trained if c.budget == main]
+        headline = {(c.algo, c.config) for c in at_main if len({d.seed for d in at_main if d.config == c.config}) >= 10}
+        assert {(c.algo, c.config.removesuffix("-tuned")) for c in trained if is_tuned(c.config)} <= headline
+    # the long budget reaches the paper's episode counts; the wall-clock cells run the same seconds per env
+    assert LONG_BUDGET >= 300_000 and {c.seconds for c in full if c.seconds} == {WALL_CLOCK_SECONDS} >= {120}
+    assert all(
+        len({c.seed for c in full if c.seconds and (c.env_id, c.algo) == (e, a)}) >= 5
+        for e, a in {(c.env_id, c.algo) for c in full if c.seconds}
+    )
     assert select(full, "*SarsaAAC-rbf*") and all("rbf" in c.config for c in select(full, "*SarsaAAC-rbf*"))
 
 

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from sb3_aac.cli import main
+from tests.helpers import algos
 
 
 def run_error(capsys, argv: list[str]) -> str:
@@ -54,6 +55,22 @@ def test_train_episodes_tensorboard_other_env(tmp_path: Path, capsys) -> None:
     assert main(["train", "--env", "sb3_aac/ParameterizedTarget-v0", "--policy", "MlpPolicy", "--timesteps", "200",
                  "--n-envs", "2", "--eval-episodes", "3", "--progress-bar"]) == 0  # fmt: skip
     assert "greedy evaluation over 3 episodes: return" in capsys.readouterr().out
+
+
+@algos()
+def test_train_every_algorithm(tmp_path: Path, capsys, case) -> None:
+    assert main(["train", "--algo", case.cli, "--policy", case.policy, "--env", "sb3_aac/ParameterizedTarget-v0",
+                 "--timesteps", "300", "--n-envs", "2", "--eval-episodes", "3", "--out", str(tmp_path),
+                 "--set", "gamma=0.8", "--tensorboard", str(tmp_path / "tb")]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    name = case.algo.__name__
+    assert f"training {name} {case.policy}" in out and "greedy evaluation over 3 episodes: return" in out
+    assert (tmp_path / "policy.aacp").exists() == case.exported  # the .aacp format carries SarsaAAC's banks only
+    run = json.loads((tmp_path / "run.json").read_text())
+    assert run["algo"] == case.cli and run["policy"] == case.policy
+    assert list((tmp_path / "tb").glob(f"{name}_{case.policy}_1/events.out.tfevents.*"))
+    model = case.algo.load(tmp_path / "model.zip")
+    assert model.gamma == 0.8 and type(model.policy) is case.algo.policy_aliases[case.policy]
 
 
 @pytest.mark.parametrize("model", ["model.zip", "policy.aacp", "dir"])

@@ -136,3 +136,60 @@ def test_stop_training_on_max_episodes(case):
     model = case.make(ParameterizedTargetEnv(max_episode_steps=5, loss_threshold=0.0), seed=0)
     model.learn(10_000, callback=StopTrainingOnMaxEpisodes(max_episodes=3))
     assert model.num_timesteps == 15  # stopped at the step that ended the third episode
+
+
+class InfoValueLogger(BaseCallback):
+    """The SB3 docs' "log an info value" callback, and the locals every algorithm shows on the array path."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.distances: list[float] = []
+
+    def _on_step(self) -> bool:
+        infos, dones = self.locals["infos"], self.locals["dones"]
+        n = self.training_env.num_envs
+        assert isinstance(infos, list) and len(infos) == n and all(isinstance(info, dict) for info in infos)
+        types, params = self.locals["actions"]  # the array path's (types, scaled parameters)
+        assert types.shape == (n,) and params.shape == (n, 7) and np.all(np.abs(params) <= 1)
+        for info, done in zip(infos, dones, strict=True):
+            assert ("terminal_observation" in info) == done
+            if "distance" in info:
+                self.distances.append(info["distance"])
+                self.logger.record_mean("custom/distance", info["distance"])
+        return True
+
+
+@algos(ALGO_CLASSES)
+def test_callback_locals_on_the_array_path(case):
+    from robocup_dribble import DribbleVecEnv
+
+    callback = InfoValueLogger()
+    case.make(DribbleVecEnv(3, profile="v11"), seed=0).learn(300, callback=callback)
+    assert callback.distances and np.isfinite(callback.distances).all()
+
+
+@algos(ALGO_CLASSES)
+def test_learn_ends_with_a_dump_and_logs_actions_and_values(tmp_path, case):
+    """A short learn writes its figures (a dump at the end), with the action-type shares, each type's parameter
+    means and standard deviations in the env's units, and the critic's value statistics."""
+    env = ParameterizedTargetEnv()
+    model = case.make(env, seed=0)
+    model.set_logger(configure(str(tmp_path), ["csv"]))
+    model.learn(250)  # fewer steps than SarsaAAC's log_min_timesteps (2,000)
+    import csv
+
+    rows = list(csv.DictReader((tmp_path / "progress.csv").open()))
+    assert rows and int(float(rows[-1]["time/total_timesteps"])) == model.num_timesteps
+    last = {key: float(value) for key, value in rows[-1].items() if value != ""}
+    shares = [last[f"rollout/type_freq_{k}"] for k in range(env.action_space[0].n)]
+    assert sum(shares) == pytest.approx(1.0)
+    spec = model.policy.spec
+    for k, dim in enumerate(spec.dims):
+        if shares[k] == 0:
+            continue
+        for i in range(dim):
+            low, high = spec.low[spec.offsets[k] + i], spec.high[spec.offsets[k] + i]
+            assert low <= last[f"rollout/param_mean_{k}_{i}"] <= high
+            assert 0 <= last[f"rollout/param_std_{k}_{i}"] <= (high - low) / 2
+    value = "train/value" if case.algo.__name__ == "SarsaAAC" else "train/q"
+    assert last[f"{value}_min"] <= last[f"{value}_mean"] <= last[f"{value}_max"] and last[f"{value}_std"] >= 0

@@ -109,18 +109,21 @@ def test_stopping_keeps_the_latest_observation():
 
 @pytest.mark.parametrize(("log_min_timesteps", "n_envs"), [(0, 1), (0, 16), (500, 16), (2000, 1)])
 def test_logs_are_dumped_by_episodes_and_timesteps(tmp_path, log_min_timesteps: int, n_envs: int):
-    """A dump needs log_interval more episodes and log_min_timesteps more env steps than the previous one."""
+    """The first dump comes after log_interval episodes; each later one needs log_interval more episodes and
+    log_min_timesteps more env steps than the previous one; learn ends with a dump."""
     env = make_vec_env(ParameterizedTargetEnv, n_envs=n_envs, seed=0)
     model = SarsaAAC("RbfPolicy", env, seed=0, log_min_timesteps=log_min_timesteps)
     model.set_logger(configure(str(tmp_path), ["csv"]))
     model.learn(4000, log_interval=3)
     rows = list(csv.DictReader((tmp_path / "progress.csv").open()))
-    steps = [0] + [int(row["time/total_timesteps"]) for row in rows]
-    episodes = [0] + [int(row["time/episodes"]) for row in rows]
-    assert len(rows) >= 1
-    assert all(b - a >= max(log_min_timesteps, 1) for a, b in pairwise(steps))
-    assert all(b - a >= 3 for a, b in pairwise(episodes))
+    steps = [int(row["time/total_timesteps"]) for row in rows]
+    episodes = [int(row["time/episodes"]) for row in rows]
+    assert len(rows) >= 2 and episodes[0] >= 3 and steps[-1] == model.num_timesteps
+    spaced = list(pairwise(steps[:-1]))  # the last dump is the end of learn's
+    assert all(b - a >= max(log_min_timesteps, 1) for a, b in spaced)
+    assert all(b - a >= 3 for a, b in pairwise(episodes[:-1]))
     if log_min_timesteps:
-        assert len(rows) <= 4000 // log_min_timesteps
+        assert steps[0] < log_min_timesteps  # the first dump does not wait for the spacing
+        assert len(rows) <= 4000 // log_min_timesteps + 2
     else:  # SB3's cadence: at the first step at which 3 more episodes have ended
         assert len(rows) >= 20

@@ -25,9 +25,11 @@ from sb3_aac import SarsaAAC  # noqa: E402
 from sb3_aac.cli import build_parser, hyperparameters, main  # noqa: E402
 from sb3_aac.common.envs import ParameterizedTargetEnv  # noqa: E402
 from sb3_aac.tune import (  # noqa: E402
+    ALGORITHMS,
     SEARCH_SPACES,
     SearchSpace,
     TuneSettings,
+    finished_trials,
     greedy_score,
     load_study,
     open_storage,
@@ -190,13 +192,33 @@ def test_bad_arguments_exit_2(tmp_path: Path, capsys, argv: list[str], message: 
 def test_settings_and_spaces_validate() -> None:
     with pytest.raises(ValueError, match="tunable policies: \\['MlpPolicy', 'RbfMlpPolicy', 'RbfPolicy', 'TilePolicy'\\]"):
         TuneSettings(env_id=TOY, policy="TabularPolicy")
-    with pytest.raises(ValueError, match="unknown algorithm 'pdqn'"):
-        search_space("pdqn", "MlpPolicy")
+    with pytest.raises(ValueError, match="unknown algorithm 'dqn'; tunable algorithms: \\['mpdqn', 'pdqn', 'sarsa_aac'\\]"):
+        search_space("dqn", "MlpPolicy")
     with pytest.raises(ValueError, match="eval_episodes must be >= 1, got 0"):
         TuneSettings(env_id=TOY, policy="RbfPolicy", eval_episodes=0)
     gamma = optuna.distributions.FloatDistribution(0.5, 0.9)
     with pytest.raises(ValueError, match="a name must mean one thing"):
         SearchSpace({"gamma": gamma}, {"gamma": gamma})
+
+
+@pytest.mark.parametrize("algo", ["pdqn", "mpdqn"])
+def test_the_pdqn_spaces_build_models(algo: str) -> None:
+    """Random points of P-DQN's and MP-DQN's spaces are valid constructor arguments, and a one-trial study runs."""
+    settings = TuneSettings(
+        env_id=TOY,
+        policy="MlpPolicy",
+        algo=algo,
+        timesteps=100,
+        eval_every=50,
+        eval_episodes=2,
+        n_envs=2,
+        fixed={"learning_starts": 60, "info_keywords": ()},
+    )
+    study = load_study(optuna.storages.InMemoryStorage(), algo, settings)
+    outcome = run_study(study, settings, toy_envs, n_trials=1)
+    assert finished_trials(outcome.study) == 1
+    model = ALGORITHMS[algo]("MlpPolicy", toy_envs(2, 0), **settings.kwargs(outcome.study.best_params))
+    assert model.learning_starts == 60 and model.batch_size == outcome.study.best_params["batch_size"]
 
 
 @pytest.mark.parametrize("policy", ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy"])
@@ -210,6 +232,17 @@ def test_every_space_builds_a_model(policy: str) -> None:
         assert "gamma" not in params and "rbf_width" not in params
         model = SarsaAAC(policy, toy_envs(2, 0), seed=0, **settings.kwargs(params))
         assert model.gamma == 0.5 and model.policy.rbf_width == 1.5
+        model.learn(20)
+
+
+def test_deep_space_builds_a_model() -> None:
+    settings = TuneSettings(env_id=TOY, policy="DeepPolicy", fixed={"gamma": 0.5})
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
+    for _ in range(3):
+        params = SEARCH_SPACES[("sarsa_aac", "DeepPolicy")].sample(study.ask(), settings.fixed_names())
+        assert "gamma" not in params and 0 <= params["trace_lambda"] <= 0.95
+        model = SarsaAAC("DeepPolicy", toy_envs(2, 0), seed=0, **settings.kwargs(params))
+        assert model.gamma == 0.5 and model.policy.kappa == params["kappa"]
         model.learn(20)
 
 

@@ -102,14 +102,56 @@ def evaluate_dribbling(
         unknown or invalid env setting.
     """
     _check_integer("n_episodes", n_episodes, 1)
-    _check_integer("n_lanes", n_lanes, 1)
+    server_profile, task_settings = configure(profile, env_kwargs.pop("noise", True), None, env_kwargs)
+    episodes = _Slots(int(n_episodes), _checked_seed(seed), task_settings.max_actions)
+    return _evaluate(policy, server_profile, task_settings, episodes, n_lanes, deterministic)
+
+
+def evaluate_episodes(
+    policy: Any,
+    player_types: np.ndarray,
+    start_states: np.ndarray,
+    profile: str | ServerProfile = "v19",
+    seed: int = 0,
+    n_lanes: int = 100,
+    deterministic: bool = True,
+    **env_kwargs: Any,
+) -> DribbleReport:
+    """Play given episodes (a player type and a start state each, row ``j`` for episode ``j``) with ``policy``.
+
+    Episode ``j`` takes the physics noise of every cycle from episode slot ``j`` of ``seed`` (module docstring;
+    the slot's start part is not used), so two policies' ``distances[j]`` are paired observations again. This is
+    the env's side of a comparison with a real server on the same episodes
+    (:func:`robocup_dribble.rcss.server_episodes`). Arguments as :func:`evaluate_dribbling`; the start states are
+    used as they are (a start of :func:`robocup_dribble.task.start_lane` has the player recovered).
+
+    :raises ValueError: for arrays of other shapes, or what :func:`evaluate_dribbling` refuses.
+    """
+    types = physics.input_array("player_types", player_types, (None, physics.TYPE_SIZE))
+    starts = physics.input_array("start_states", start_states, (len(types), physics.STATE_SIZE))
+    if len(types) == 0:
+        raise ValueError("evaluate_episodes needs at least one episode")
+    server_profile, task_settings = configure(profile, env_kwargs.pop("noise", True), None, env_kwargs)
+    episodes = _Slots(len(types), _checked_seed(seed), task_settings.max_actions, (types, starts))
+    return _evaluate(policy, server_profile, task_settings, episodes, n_lanes, deterministic)
+
+
+def _checked_seed(seed: Any) -> int:
     _check_integer("seed", seed, 0)
     if seed >= 2**64:
         raise ValueError(f"seed must be below 2**64 (a Philox key word), got {seed!r}")
-    server_profile, task_settings = configure(profile, env_kwargs.pop("noise", True), None, env_kwargs)
-    n_lanes = min(int(n_lanes), int(n_episodes))
-    lanes = DribbleLanes(n_lanes, server_profile, task_settings, np.random.default_rng(seed))  # its rng stays unused
-    episodes = _Slots(int(n_episodes), int(seed), task_settings.max_actions)
+    return int(seed)
+
+
+def _evaluate(
+    policy: Any, server_profile: ServerProfile, task_settings: DribbleTask, episodes: _Slots, n_lanes: int,
+    deterministic: bool,
+) -> DribbleReport:  # fmt: skip
+    """Play every slot of ``episodes``, ``n_lanes`` at a time (handed to lanes in order as they free up)."""
+    _check_integer("n_lanes", n_lanes, 1)
+    n_episodes = len(episodes.distances)
+    n_lanes = min(int(n_lanes), n_episodes)
+    lanes = DribbleLanes(n_lanes, server_profile, task_settings, np.random.default_rng(0))  # its rng stays unused
     all_lanes = np.arange(n_lanes)
     slot_of_lane = np.arange(n_lanes)
     noise = np.empty((n_lanes, task_settings.max_actions, physics.N_UNIFORMS))
@@ -220,8 +262,11 @@ def distance_bound(
 class _Slots:
     """The episode slots of one evaluation: their uniforms (module docstring), and the results as they come in."""
 
-    def __init__(self, n_episodes: int, seed: int, max_actions: int) -> None:
+    def __init__(
+        self, n_episodes: int, seed: int, max_actions: int, given: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> None:
         self.max_actions = max_actions
+        self.given = given  # (player types, start states) of every slot, or None: drawn from the slot's block
         self.noise_size = max_actions * physics.N_UNIFORMS
         self.block = self.noise_size + START_UNIFORMS
         self._bits = np.random.Philox(key=seed)
@@ -237,6 +282,10 @@ class _Slots:
         returns their observations."""
         blocks = self._draw((first * self.block // 4, 0, 0, 0), (len(lane_ids), self.block))
         noise[lane_ids] = blocks[:, : self.noise_size].reshape(len(lane_ids), self.max_actions, physics.N_UNIFORMS)
+        slots = np.arange(first, first + len(lane_ids))
+        if self.given is not None:
+            self.player_types[slots], self.start_states[slots] = self.given[0][slots], self.given[1][slots]
+            return lanes.place(lane_ids, self.given[0][slots], self.given[1][slots])
         obs, short = lanes.start_from(lane_ids, blocks[:, self.noise_size :])
         for r in np.flatnonzero(short).tolist():  # a long run of rejected player types: continue on its own counters
             row, extra = blocks[r : r + 1, self.noise_size :], START_UNIFORMS
@@ -244,7 +293,6 @@ class _Slots:
                 more = self._draw((0, first + r, 1, 0), (1, extra))
                 obs[r : r + 1], short[r : r + 1] = lanes.start_from(lane_ids[r : r + 1], np.concatenate((row, more), axis=1))
                 extra *= 2
-        slots = np.arange(first, first + len(lane_ids))
         self.player_types[slots] = lanes.types[lane_ids]
         self.start_states[slots] = lanes.state[lane_ids]
         return obs

@@ -254,6 +254,25 @@ class DribbleLanes:
         short = _start_lanes_from_rows(self.arrays, self._settings, self.profile.player.player_types, index, rows, obs)
         return obs, short
 
+    def place(self, lanes: np.ndarray, player_types: np.ndarray, start_states: np.ndarray) -> np.ndarray:
+        """Start a new episode in each of ``lanes`` from a given player type and start state (row ``r`` for
+        ``lanes[r]``), as they are: nothing is drawn and the player is not recovered. The lane's type set and type
+        id are left as they were (an episode it starts later through :meth:`reset` or an autoreset plays its set).
+
+        :return: the observations ``(len(lanes), 10)``.
+        :raises ValueError: for indices that are not distinct integers in range, or arrays of other shapes.
+        """
+        index = self._checked_lanes(lanes)
+        types = physics.input_array("player_types", player_types, (len(index), physics.TYPE_SIZE))
+        states = physics.input_array("start_states", start_states, (len(index), physics.STATE_SIZE))
+        a, g = self.arrays, self._settings
+        a.state[index], a.types[index] = states, types
+        a.steps[index], a.start_x[index], a.distance[index], a.returns[index] = 0, states[:, physics.P_X], 0.0, 0.0
+        obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
+        for row, lane in enumerate(index.tolist()):
+            task.observe(a.state, lane, a.types, lane, g.obs_low, g.obs_high, obs, row)
+        return obs
+
     def _checked_uniforms(self, uniforms: np.ndarray) -> np.ndarray:
         given = physics.input_array("uniforms", uniforms, (self.n_lanes, physics.N_UNIFORMS))
         if not ((given >= 0.0) & (given <= 1.0)).all():

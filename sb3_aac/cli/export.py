@@ -1,4 +1,5 @@
-"""``sb3-aac export``: write a trained model's policy as a ``.aacp`` file for a runtime without torch."""
+"""``sb3-aac export``: write a trained model's policy as a ``.aacp`` file for a runtime without torch; ``sb3-aac c-header``:
+where the C runtime that reads it (``aacp.h``) is installed."""
 
 from __future__ import annotations
 
@@ -40,3 +41,19 @@ def cmd_export(args: argparse.Namespace) -> None:
     policy = RuntimePolicy.load(path)
     print(f"wrote {path} ({path.stat().st_size} bytes): {policy!r}")
     print("load it with: from sb3_aac.runtime import RuntimePolicy; RuntimePolicy.load(path).act(obs)  (numpy only)")
+
+
+def add_c_header_command(add: Any) -> None:
+    """Add ``c-header`` through ``add(name, help, example)``."""
+    header = add(
+        "c-header",
+        "print the path of aacp.h, the C99 header that loads an exported .aacp policy in a C or C++ agent",
+        'c++ -I "$(dirname "$(sb3-aac c-header)")" agent.cpp   # docs: Using a policy in a C++ agent',
+    )
+    header.set_defaults(func=cmd_c_header)
+
+
+def cmd_c_header(args: argparse.Namespace) -> None:
+    from sb3_aac.runtime.c import header_path
+
+    print(header_path())

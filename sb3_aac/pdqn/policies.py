@@ -11,6 +11,7 @@ from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
 from torch import nn
 
 from sb3_aac.common.observations import observation_batch
+from sb3_aac.common.sizes import check_layer_sizes
 from sb3_aac.common.spaces import ParameterizedActionSpec
 
 PARAM_BOUNDINGS = ("invert_gradients", "tanh")
@@ -154,8 +155,8 @@ class PDQNPolicy(BasePolicy):
             raise ValueError(f"Unknown param_bounding {param_bounding!r}, valid values: {list(PARAM_BOUNDINGS)}")
         super().__init__(observation_space, action_space, optimizer_class=optimizer_class, optimizer_kwargs=optimizer_kwargs)
         self.spec = ParameterizedActionSpec.from_space(action_space)
-        self.net_arch = [128] if net_arch is None else list(net_arch)
-        self.actor_net_arch = self.net_arch if actor_net_arch is None else list(actor_net_arch)
+        self.net_arch = [128] if net_arch is None else check_layer_sizes("net_arch", net_arch)
+        self.actor_net_arch = self.net_arch if actor_net_arch is None else check_layer_sizes("actor_net_arch", actor_net_arch)
         self.activation_fn, self.multi_pass, self.param_bounding = activation_fn, multi_pass, param_bounding
         self.initial_params = initial_params
         self.actor_lr_schedule = lr_schedule if actor_lr_schedule is None else actor_lr_schedule

@@ -47,6 +47,7 @@ import numpy as np
 import torch as th
 from torch import nn
 
+from sb3_aac.common.sizes import check_allocation, is_whole
 from sb3_aac.runtime.forward import BankForward, check_rbf_window
 from sb3_aac.sarsa_aac.kernels import ForwardPass, NumpyKernel
 from sb3_aac.sarsa_aac.lane_steps import linear_steps, mlp_steps
@@ -61,8 +62,8 @@ def rbf_layout(n_inputs: int, n_rbf: int, rbf_width: float) -> tuple[np.ndarray,
 
     :return: ``centers`` and ``widths``, each of shape ``(n_inputs, n_rbf)``
     """
-    if n_rbf < 1:
-        raise ValueError(f"n_rbf must be >= 1, got {n_rbf}")
+    if not (is_whole(n_rbf) and n_rbf >= 1):
+        raise ValueError(f"n_rbf must be a whole number >= 1, got {n_rbf!r}")
     if not rbf_width > 0:
         raise ValueError(f"rbf_width must be > 0, got {rbf_width}")
     centers = np.linspace(-1.0, 1.0, n_rbf) if n_rbf > 1 else np.zeros(1)
@@ -202,8 +203,10 @@ class ApproximatorBank(NumpyBank):
                 f"RBF features need finite bounds for every input, got low={low}, high={high}; "
                 "pass finite bounds for the RBF placement (policy_kwargs obs_bounds=(low, high))"
             )
-        if hidden_units is not None and hidden_units < 1:
-            raise ValueError(f"hidden_units must be >= 1 or None, got {hidden_units}")
+        if hidden_units is not None and not (is_whole(hidden_units) and hidden_units >= 1):
+            raise ValueError(f"hidden_units must be a whole number >= 1 or None, got {hidden_units!r}")
+        n_weights = n_outputs * len(low) * (n_rbf or 1) * (hidden_units or 1)
+        check_allocation(f"The approximators (n_rbf={n_rbf}, hidden_units={hidden_units})", n_weights)
         self.n_inputs, self.n_outputs = len(low), n_outputs
         self.n_rbf, self.hidden_units = n_rbf, hidden_units
         check_rbf_window(rbf_window)

@@ -4,8 +4,6 @@ import math
 import sys
 import time
 import zipfile
-from collections.abc import Mapping
-from types import MappingProxyType
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -14,18 +12,19 @@ from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
-from sb3_aac.common.array_env import array_path
+from sb3_aac.common.action_stats import ActionStats
+from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
+from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
 from sb3_aac.common.model_files import check_model_file, check_policy_class
 from sb3_aac.common.observations import observation_batch
+from sb3_aac.sarsa_aac.deep import DeepKernel, DeepTraces
 from sb3_aac.sarsa_aac.kernels import Kernel
 from sb3_aac.sarsa_aac.tile_coding import TileKernel, TileTraces
-from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
+from sb3_aac.sarsa_aac.policies import DeepPolicy, MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
-# The info of a lane whose episode goes on, on the array path (read-only, shared by those lanes).
-_NO_INFO: Mapping[str, Any] = MappingProxyType({})
 
 TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
 # Schedules are re-evaluated whenever training progress has moved by this much (0.1%), not at every step.
@@ -65,7 +64,7 @@ def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator
     return k
 
 
-class SarsaAAC(EpisodeStatsMixin):
+class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     """
     SARSA Actor-Actor-Critic (SARSA-AAC) for parameterized actions: pick one of K action types, then a real-valued
     parameter vector for it.
@@ -81,7 +80,7 @@ class SarsaAAC(EpisodeStatsMixin):
     - CACLA (van Hasselt & Wiering 2007) on the parameter actor: only if ``delta > 0``, the approximators of
       type ``k``'s parameters step toward the *executed* parameters ``p`` (in the scaled ``[-1, 1]`` space).
 
-    With ``trace_lambda > 0`` (TilePolicy only) the critic learns by TD(lambda) and the action-type actor by
+    With ``trace_lambda > 0`` (TilePolicy and DeepPolicy) the critic learns by TD(lambda) and the action-type actor by
     SARSA(lambda) (Sutton & Barto, 2nd ed., Sec. 12.2 and 12.7): each step's error also moves the earlier states
     (and types) of the episode in proportion to their eligibility traces, which decay by ``gamma * trace_lambda``
     per step; one trace per lane, zeroed where an episode ends (termination or truncation, after that step's
@@ -105,7 +104,8 @@ class SarsaAAC(EpisodeStatsMixin):
     (the targets bootstrapped from the weights at the start of the env step): a rate means the same per sample
     whatever the number of lanes, so the learning curve per env step changes with the lane count only through the
     order and the correlation of the samples (measured in ``docs/sarsa_aac.md``). Rates are validated to lie in
-    ``(0, 1]``.
+    ``[0, 1]``; 0 freezes an approximator (as rl-zoo3's ``enjoy`` loads a model only to act, with
+    ``custom_objects={"learning_rate": 0.0}``).
 
     Reward units do not matter: ``return_scale`` is the root mean square of the lanes' discounted returns
     (``G <- gamma * G + r``, reset at episode ends) over all steps so far. When it first becomes non-zero, the
@@ -120,9 +120,8 @@ class SarsaAAC(EpisodeStatsMixin):
     non-finite value the weights are restored to that copy and a ``FloatingPointError`` names the approximators;
     ``save`` after it saves a usable model.
 
-    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; then
-    ``actions`` in the callbacks' locals is the pair (types, scaled parameters) and ``infos`` holds dicts only for
-    the lanes whose episode ended. Other envs are stepped with SB3's ``env.step``.
+    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays, other envs
+    with SB3's ``env.step``; the callbacks' locals are the same on both (see :mod:`sb3_aac.common.array_env`).
     All updates are closed-form numpy on the CPU, vectorised over environments; ``device`` only says where the
     parameters are stored between ``learn()`` calls. Callbacks run after ``env.step`` and before that step's
     update.
@@ -145,8 +144,8 @@ class SarsaAAC(EpisodeStatsMixin):
     :param policy: The policy model to use (TilePolicy, recommended; MlpPolicy, RbfMlpPolicy, RbfPolicy; or a
         SarsaAACPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
-    :param learning_rate: Critic learning rate (normalised, in ``(0, 1]``), or a schedule of the progress
-        remaining (from 1 to 0) whose values at 1 and 0 are in ``(0, 1]``
+    :param learning_rate: Critic learning rate (normalised, in ``[0, 1]``), or a schedule of the progress
+        remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``
     :param q_learning_rate: Action-type actor learning rate, or a schedule
     :param param_learning_rate: Parameter actor learning rate, or a schedule
     :param gamma: The discount factor
@@ -161,7 +160,7 @@ class SarsaAAC(EpisodeStatsMixin):
     :param param_noise_initial: Initial standard deviation of the Gaussian noise on the scaled parameters
     :param param_noise_final: Final standard deviation of the parameter noise
     :param trace_lambda: The eligibility-trace decay ``lambda`` in ``[0, 1]`` of the critic and the action-type
-        actor; 0 (the default) is the one-step update; ``> 0`` needs TilePolicy
+        actor; 0 (the default) is the one-step update; ``> 0`` needs TilePolicy or DeepPolicy
     :param replacing_traces: Replacing traces (a visited feature's trace is set to 1, and its traces of the
         other action types to 0) if True, accumulating traces (1 is added) if False
     :param info_keywords: Keys of ``info`` read at the step where an episode ends and logged as
@@ -170,9 +169,10 @@ class SarsaAAC(EpisodeStatsMixin):
         the reported success rate, mean episode length, and mean reward over
     :param log_min_timesteps: ``learn(log_interval=n)`` dumps the logs once ``n`` episodes (SB3's off-policy
         convention) *and* at least this many env steps (counted over all lanes) have passed since the previous
-        dump or the start of ``learn``. The spacing in steps keeps logging a fixed share of the work whatever the
-        number of lanes (with 256 lanes, episodes end at every step, so ``n`` episodes alone would dump at every
-        step); 0 dumps every ``n`` episodes, as SB3's DQN does.
+        dump. The spacing in steps keeps logging a fixed share of the work whatever the number of lanes (with 256
+        lanes, episodes end at every step, so ``n`` episodes alone would dump at every step); 0 dumps every ``n``
+        episodes, as SB3's DQN does. The first dump of a ``learn`` call comes after its first ``n`` episodes, without
+        the spacing, and ``learn`` ends with a dump of what it logged since the last one.
     :param tensorboard_log: the log location for tensorboard (if None, no logging)
     :param policy_kwargs: additional arguments to be passed to the policy on creation (see :class:`DenseBankPolicy`
         for MlpPolicy, RbfMlpPolicy and RbfPolicy, :class:`TilePolicy`)
@@ -184,6 +184,7 @@ class SarsaAAC(EpisodeStatsMixin):
     """
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {
+        "DeepPolicy": DeepPolicy,
         "MlpPolicy": MlpPolicy,
         "RbfMlpPolicy": RbfMlpPolicy,
         "RbfPolicy": RbfPolicy,
@@ -263,9 +264,9 @@ class SarsaAAC(EpisodeStatsMixin):
         for name in ("learning_rate", "q_learning_rate", "param_learning_rate"):
             rate = getattr(self, name)
             values = (rate(1.0), rate(0.0)) if callable(rate) else (rate,)
-            if not all(isinstance(v, (int, float, np.floating)) and 0 < v <= 1 for v in values):
+            if not all(isinstance(v, (int, float, np.floating)) and 0 <= v <= 1 for v in values):
                 raise ValueError(
-                    f"{name} must be in (0, 1] (a normalised step; 1 lands one sample on its target), got "
+                    f"{name} must be in [0, 1] (a normalised step; 1 lands one sample on its target, 0 learns nothing), got "
                     f"{values[0] if len(values) == 1 else f'a schedule from {values[0]} to {values[1]}'}"
                 )
         if self.type_exploration not in TYPE_EXPLORATIONS:
@@ -306,15 +307,15 @@ class SarsaAAC(EpisodeStatsMixin):
         # SB3 types policy_class as type[BasePolicy]; __init__ checked that it is a SarsaAACPolicy.
         self.policy = self.policy_class(self.observation_space, self.action_space, **self.policy_kwargs)  # type: ignore[assignment]
         self.policy = self.policy.to(self.device)
-        if self.trace_lambda > 0 and not isinstance(self.policy, TilePolicy):
+        if self.trace_lambda > 0 and not isinstance(self.policy, (TilePolicy, DeepPolicy)):
             raise ValueError(
-                f"trace_lambda > 0 (got {self.trace_lambda}) needs linear tile heads (TilePolicy); "
+                f"trace_lambda > 0 (got {self.trace_lambda}) needs linear tile heads (TilePolicy) or DeepPolicy; "
                 f"{type(self.policy).__name__} learns with one-step updates only (trace_lambda=0)"
             )
         # The action a' chosen at _last_obs and not yet executed: (obs (n, D), k (n,), scaled params (n, P)).
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         # The lanes' eligibility traces of the episodes under way (None with trace_lambda == 0 or before learn).
-        self._traces: TileTraces | None = None
+        self._traces: TileTraces | DeepTraces | None = None
         # Count and sum of squares of the lanes' discounted returns so far; return_scale = sqrt(sum / count).
         # Kept when load() calls this after restoring them (0 until the first non-zero reward).
         self._return_moments = getattr(self, "_return_moments", np.zeros(2))
@@ -332,8 +333,8 @@ class SarsaAAC(EpisodeStatsMixin):
         return [
             *super()._excluded_save_params(),
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
-            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
-            *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_traces", "_trace_hits"),
+            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_action_stats"),
+            *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_dumped_in_learn", "_traces", "_trace_hits"),
         ]
 
     # ------------------------------------------------------------------ acting
@@ -397,7 +398,7 @@ class SarsaAAC(EpisodeStatsMixin):
         :param total_timesteps: The total number of samples (env steps) to train on
         :param callback: callback(s) called at every step with state of the algorithm.
         :param log_interval: Dump the logs every ``log_interval`` finished episodes, but at most once per
-            ``log_min_timesteps`` env steps (see the class docstring; None: never)
+            ``log_min_timesteps`` env steps, and at the end (see the class docstring; None: never)
         :param tb_log_name: the name of the run for TensorBoard logging
         :param reset_num_timesteps: whether or not to reset the current timestep number (used in logging)
         :param progress_bar: Display a progress bar using tqdm and rich.
@@ -408,6 +409,7 @@ class SarsaAAC(EpisodeStatsMixin):
             total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
         )
         self._last_dump = (self._episode_num, self.num_timesteps)
+        self._dumped_in_learn = False
         callback.on_training_start(locals(), globals())
         assert self.env is not None
         env = self.env
@@ -416,6 +418,7 @@ class SarsaAAC(EpisodeStatsMixin):
         self._kernel = self.policy.rebind()
         if self._pending is None or self._last_obs is not obs_before:
             obs = self._last_obs.astype(np.float64).reshape(self.n_envs, -1)  # type: ignore[union-attr]
+            self._observe(obs)
             self._pending = (obs, *self._explore(self._kernel.forward(obs)[0]))
             self._traces = self._new_traces()  # new episodes
 
@@ -429,15 +432,16 @@ class SarsaAAC(EpisodeStatsMixin):
                 # Callbacks see ``actions`` in locals(): the env's actions, or (types, params) on the array path.
                 actions: np.ndarray | tuple[np.ndarray, np.ndarray]
                 new_obs: np.ndarray
-                infos: list[Mapping[str, Any]]
+                infos: list[dict[str, Any]]
                 if array_env is None:
                     actions = self.policy.spec.to_env(k, params)
                     # SB3 types VecEnv observations as a union; a Box observation space gives an array.
                     new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
                 else:
                     actions = (k, params)
-                    new_obs, rewards, dones, infos = self._step_arrays(array_env, k, params)
+                    new_obs, rewards, dones, infos = step_as_vec_env(array_env, k, self.policy.spec.unscale(params))
                 self.num_timesteps += env.num_envs
+                check_finite_step(new_obs, rewards, self.num_timesteps)
 
                 callback.update_locals(locals())
                 if not callback.on_step():
@@ -449,37 +453,20 @@ class SarsaAAC(EpisodeStatsMixin):
                 any_done = bool(dones.any())
                 if any_done:  # episode statistics and success flags exist only where an episode ended
                     ended = np.flatnonzero(dones)
-                    # SB3 annotates the infos as dicts but only reads them.
-                    self._update_info_buffer([infos[i] for i in ended], dones[ended])  # type: ignore[misc]
+                    self._update_info_buffer([infos[i] for i in ended], dones[ended])
                 self._train_step(new_obs, rewards, dones, infos, any_done)
                 self._last_obs, self._last_episode_starts = new_obs, dones
                 if any_done:
                     self._on_episodes_end(dones, infos, log_interval)
             self._flush_td_chunks()
+            if log_interval is not None and self.num_timesteps > self._last_dump[1]:
+                self.dump_logs()
         finally:
             if self.device.type != "cpu":
                 self.policy.to(self.device)
         callback.on_rollout_end()
         callback.on_training_end()
         return self
-
-    def _step_arrays(
-        self, env: Any, k: np.ndarray, params: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
-        """
-        One step on the array path (:mod:`sb3_aac.common.array_env`), returned as SB3's ``VecEnv.step`` would:
-        ``info`` dicts are built only for the lanes whose episode ended (the others share one empty dict).
-        """
-        step = env.step_arrays(k, self.policy.spec.unscale(params))
-        dones = step.terminated | step.truncated
-        infos: list[Mapping[str, Any]] = [_NO_INFO] * len(dones)
-        for i in np.flatnonzero(dones):
-            info = {key: values[i] for key, values in step.episode_info.items()}
-            info["episode"] = {"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])}
-            info["terminal_observation"] = step.terminal_observations[i]
-            info["TimeLimit.truncated"] = bool(step.truncated[i])
-            infos[i] = info
-        return step.observations, step.rewards, dones, infos
 
     def _update_schedules(self) -> None:
         """Evaluate the exploration and learning-rate schedules at the current progress."""
@@ -500,7 +487,7 @@ class SarsaAAC(EpisodeStatsMixin):
         self.param_noise = self.param_noise_schedule(progress)
 
     def _train_step(
-        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[Mapping[str, Any]], any_done: bool
+        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]], any_done: bool
     ) -> None:
         """One SARSA-AAC update of every approximator, for all envs at once; then choose the next action."""
         policy, kernel, gamma = self.policy, self._kernel, self.gamma
@@ -521,8 +508,9 @@ class SarsaAAC(EpisodeStatsMixin):
         else:
             batch = np.concatenate((obs, next_obs))
         rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
-        # Before the forward pass: it may put the weights into return units.
+        # Before the forward pass: it may put the weights into return units, and s' normalised with itself.
         self._track_return_scale(rewards, dones)
+        self._observe(next_obs)
         # One forward pass for s (weights as they are now), s' and the terminal observations.
         out, cache = kernel.forward(batch)
         if not math.isfinite(out.sum()):  # one reduction catches NaN and inf before an action is chosen from them
@@ -544,17 +532,22 @@ class SarsaAAC(EpisodeStatsMixin):
         # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0.
         err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
         err[:, vi] = delta
-        if self._traces is None:
+        if isinstance(kernel, DeepKernel):
+            assert self._traces is None or isinstance(self._traces, DeepTraces)
+            kernel.update(cache, err, self._lr, self._hidden_gain, k, self._traces)
+            if any_done and self._traces is not None:
+                self._traces.clear(np.flatnonzero(dones))
+        elif self._traces is None:
             kernel.update(cache, err, self._lr, self._hidden_gain)
         else:
-            assert isinstance(kernel, TileKernel)  # checked in _setup_model
+            assert isinstance(kernel, TileKernel) and isinstance(self._traces, TileTraces)  # checked in _setup_model
             kernel.update_traced(cache, err, self._lr, self._trace_hits[k], self._traces)
             if any_done:
                 self._traces.clear(np.flatnonzero(dones))
         self._n_updates += 1
 
         self._pending = (next_obs, next_k, next_params)
-        self._td_chunks.append((delta, q_error, k))
+        self._td_chunks.append((delta, q_error, k, params, current[:, vi]))
         if len(self._td_chunks) >= CHECK_INTERVAL:
             self._flush_td_chunks()
             self._keep_finite_weights()
@@ -608,11 +601,18 @@ class SarsaAAC(EpisodeStatsMixin):
 
     # ------------------------------------------------------------------ statistics and logging
 
-    def _new_traces(self) -> TileTraces | None:
+    def _observe(self, obs: np.ndarray) -> None:
+        """Fold new observations ``(n, D)`` into a deep policy's running statistics (other policies keep none)."""
+        if isinstance(self.policy, DeepPolicy):
+            self.policy.approximators.observe(obs)
+
+    def _new_traces(self) -> TileTraces | DeepTraces | None:
         """Zero eligibility traces of the action-type actor and the critic, one per lane (None if ``trace_lambda == 0``)."""
         if self.trace_lambda == 0:
             return None
         policy = self.policy
+        if isinstance(policy, DeepPolicy):
+            return policy.approximators.new_traces(self.n_envs, self.gamma * self.trace_lambda)
         assert isinstance(policy, TilePolicy)  # checked in _setup_model
         columns = np.array([*range(policy.n_types), policy.value_index])
         # hit[k]: the columns whose trace the features of (s, k) set: Q_k and V.
@@ -626,24 +626,24 @@ class SarsaAAC(EpisodeStatsMixin):
         )
 
     def _reset_train_stats(self) -> None:
-        n_types = self.policy.n_types
         self._lr = np.zeros(self.policy.value_index + 1)
         self._rows = np.arange(self.n_envs)
-        self._td_chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        # Per step since the last flush: delta, the SARSA error, the executed types and scaled parameters, V(s).
+        self._td_chunks: list[tuple[np.ndarray, ...]] = []
         self._hidden_gain = np.ones_like(self._lr)
         self._set_return_units()
         self._lane_returns = None
         self._finite_weights = None
         self._finite_weights_timestep = 0
-        # Sums since the last dump (TRAIN_STAT_FIELDS); type counts.
+        # Sums since the last dump (TRAIN_STAT_FIELDS); the executed actions and the critic's values.
         self._train_stats = np.zeros(len(TRAIN_STAT_FIELDS))
-        self._type_counts = np.zeros(n_types, dtype=np.int64)
+        self._action_stats = ActionStats(self.policy.spec)
 
     def _flush_td_chunks(self) -> None:
         """Fold the per-step TD errors into the running sums, and stop on divergence."""
         if not self._td_chunks:
             return
-        delta, q_error, k = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
+        delta, q_error, k, params, values = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
         self._td_chunks.clear()
         sums = {
             "n": len(delta),
@@ -659,7 +659,7 @@ class SarsaAAC(EpisodeStatsMixin):
         if not np.isfinite(sums["q_error_sq"]):
             self._raise_divergence("the action-type actor's SARSA error")
         self._train_stats += [sums[name] for name in TRAIN_STAT_FIELDS]
-        self._type_counts += np.bincount(k, minlength=len(self._type_counts))
+        self._action_stats.add(k, params, values)
 
     def _check_weights(self) -> None:
         finite = self.policy.finite_outputs()
@@ -689,12 +689,12 @@ class SarsaAAC(EpisodeStatsMixin):
         self._traces = None
         remedy = (
             f"Lower the learning rates (learning_rate={self.learning_rate}, q_learning_rate={self.q_learning_rate}, "
-            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in (0, 1]), lower gamma, "
+            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in [0, 1]), lower gamma, "
             "or rescale the rewards"
         )
         raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy, restored)
 
-    def _on_episodes_end(self, dones: np.ndarray, infos: list[Mapping[str, Any]], log_interval: int | None) -> None:
+    def _on_episodes_end(self, dones: np.ndarray, infos: list[dict[str, Any]], log_interval: int | None) -> None:
         for i in np.flatnonzero(dones):
             self._add_episode_keywords(infos[i])
         self._episode_num += int(dones.sum())
@@ -704,7 +704,7 @@ class SarsaAAC(EpisodeStatsMixin):
         if (
             log_interval is not None
             and self._episode_num - episodes >= log_interval
-            and self.num_timesteps - timesteps >= self.log_min_timesteps
+            and (self.num_timesteps - timesteps >= self.log_min_timesteps or not self._dumped_in_learn)
         ):
             self.dump_logs()
 
@@ -726,9 +726,8 @@ class SarsaAAC(EpisodeStatsMixin):
         record("rollout/exploration_rate", self.exploration_rate)
         stats = dict(zip(TRAIN_STAT_FIELDS, self._train_stats, strict=True))
         n = stats["n"]
+        self._action_stats.record(self.logger)
         if n > 0:
-            for k, count in enumerate(self._type_counts):
-                record(f"rollout/type_freq_{k}", count / n)
             record("train/td_error_mean", stats["delta"] / n)
             record("train/td_error_abs_mean", stats["delta_abs"] / n)
             record("train/critic_loss", stats["delta_sq"] / n)
@@ -745,8 +744,8 @@ class SarsaAAC(EpisodeStatsMixin):
         record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
         self.logger.dump(step=self.num_timesteps)
         self._last_dump = (self._episode_num, self.num_timesteps)
+        self._dumped_in_learn = True
         self._train_stats[:] = 0
-        self._type_counts[:] = 0
 
     # ------------------------------------------------------------------ persistence
 

@@ -2,8 +2,9 @@
 What ``sb3-aac tune`` and rl-zoo3's ``--optimize`` can tune: the algorithm classes by key, and one search space per
 (algorithm, policy), as data.
 
-Adding an algorithm (e.g. P-DQN) takes an entry in :data:`ALGORITHMS` and one :class:`SearchSpace` per policy in
-:data:`SEARCH_SPACES`; the tuner, the report and the rl-zoo3 sampler read only these two tables.
+Adding an algorithm takes an entry in :data:`ALGORITHMS` and one :class:`SearchSpace` per policy in
+:data:`SEARCH_SPACES`; the tuner, the report, the rl-zoo3 sampler and the benchmark's tuning stage
+(``benchmarks/tuning.py``) read only these two tables. HybridPPO's space goes here too (``"hybrid_ppo"``).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import optuna
 from optuna.distributions import BaseDistribution, CategoricalDistribution, FloatDistribution, IntDistribution
 from stable_baselines3.common.base_class import BaseAlgorithm
 
+from sb3_aac.pdqn import MPDQN, PDQN
 from sb3_aac.sarsa_aac import SarsaAAC
 
 
@@ -62,7 +64,7 @@ class SearchSpace:
         return kwargs
 
 
-ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"sarsa_aac": SarsaAAC}
+ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"sarsa_aac": SarsaAAC, "pdqn": PDQN, "mpdqn": MPDQN}
 
 # SarsaAAC's rates are normalised (1 moves a linear approximator onto its target), so they are searched on (0, 1].
 # A 40-trial study of RbfPolicy on RoboCupDribblePaper-v0 (50k steps, 3 seeds a trial) put its best trials at the
@@ -80,7 +82,24 @@ _SARSA_AAC = {
 }
 _RBF_WIDTH = FloatDistribution(0.5, 2.0)
 
+# P-DQN / MP-DQN: the ranges span the reference MP-DQN code's settings (Bester et al. 2019: Adam 1e-3 / 1e-4, Polyak
+# 0.1 / 0.001, gamma 0.9 on Platform, minibatch 128) and hyperparams/<algo>.yml's dribbling settings by a factor of
+# about 10 each way; the nets stay those of the hyperparameter file (a list is no Optuna parameter).
+_PDQN = {
+    "learning_rate": FloatDistribution(1e-4, 1e-2, log=True),
+    "actor_learning_rate": FloatDistribution(1e-5, 1e-3, log=True),
+    "batch_size": CategoricalDistribution((32, 64, 128, 256)),
+    "tau": FloatDistribution(0.005, 0.5, log=True),
+    "actor_tau": FloatDistribution(1e-4, 0.01, log=True),
+    "gamma": FloatDistribution(0.9, 0.999),
+    "exploration_fraction": FloatDistribution(0.02, 0.5),
+    "exploration_final_eps": FloatDistribution(0.0, 0.1),
+    "param_noise_std": FloatDistribution(1e-4, 0.5, log=True),
+}
+
 SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
+    ("pdqn", "MlpPolicy"): SearchSpace(_PDQN),
+    ("mpdqn", "MlpPolicy"): SearchSpace(_PDQN),
     ("sarsa_aac", "MlpPolicy"): SearchSpace(_SARSA_AAC, {"hidden_units": IntDistribution(2, 40, log=True)}),
     ("sarsa_aac", "RbfMlpPolicy"): SearchSpace(
         _SARSA_AAC,
@@ -89,6 +108,10 @@ SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
     ("sarsa_aac", "RbfPolicy"): SearchSpace(_SARSA_AAC, {"n_rbf": IntDistribution(5, 80), "rbf_width": _RBF_WIDTH}),
     ("sarsa_aac", "TilePolicy"): SearchSpace(
         _SARSA_AAC, {"tiles_per_input": IntDistribution(4, 16), "n_tilings": IntDistribution(4, 16)}
+    ),
+    # DeepPolicy learns best with traces (docs/sarsa_aac.md: trace_lambda=0.8); ObGD's kappa around the paper's 2.
+    ("sarsa_aac", "DeepPolicy"): SearchSpace(
+        {**_SARSA_AAC, "trace_lambda": FloatDistribution(0.0, 0.95)}, {"kappa": FloatDistribution(1.0, 4.0)}
     ),
 }
 

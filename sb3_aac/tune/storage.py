@@ -9,6 +9,9 @@ from optuna.storages import BaseStorage, JournalStorage, RDBStorage
 from optuna.storages.journal import JournalFileBackend
 
 SQLITE_PREFIX = "sqlite:///"
+# How long to wait for a database server to accept a connection (PostgreSQL's and MySQL's drivers take this
+# argument), so that an unreachable host fails at once instead of after the system's TCP timeout.
+CONNECT_TIMEOUT_S = 10
 
 
 def open_storage(spec: str) -> BaseStorage:
@@ -23,8 +26,11 @@ def open_storage(spec: str) -> BaseStorage:
     if "://" in spec:
         if spec.startswith(SQLITE_PREFIX):
             _make_parent(Path(spec[len(SQLITE_PREFIX) :]), spec)
+        engine_kwargs = (
+            {"connect_args": {"connect_timeout": CONNECT_TIMEOUT_S}} if spec.startswith(("postgresql", "mysql")) else {}
+        )
         try:
-            return RDBStorage(spec)
+            return RDBStorage(spec, engine_kwargs=engine_kwargs)
         except Exception as error:  # sqlalchemy's errors (and a driver's ImportError) have no common base
             raise ValueError(f"cannot open the study database {spec!r}: {_first_line(error)}") from None
     path = Path(spec)

@@ -113,7 +113,7 @@ def load_study(storage: BaseStorage, study_name: str, settings: TuneSettings) ->
         study_name=study_name,
         direction="maximize",
         load_if_exists=True,
-        pruner=MedianPruner(n_startup_trials=settings.startup_trials, n_warmup_steps=settings.warmup_evaluations),
+        pruner=median_pruner(settings.startup_trials, settings.warmup_evaluations),
     )
     stored = study.user_attrs.get("settings")
     if stored is None:
@@ -123,15 +123,22 @@ def load_study(storage: BaseStorage, study_name: str, settings: TuneSettings) ->
         was = ", ".join(f"{name}={stored.get(name)}" for name in differ)
         raise ValueError(f"study {study_name!r} was made with {was}; resume it with those settings or give another study name")
     # Seeded by the trials so far, so that a resumed study does not repeat its first random trials.
+    study.sampler = tpe_sampler(settings.startup_trials, settings.seed + len(study.trials))
+    return study
+
+
+def median_pruner(startup_trials: int, warmup_evaluations: int) -> MedianPruner:
+    """The pruner of every study: stop a trial whose evaluation falls below the median of the trials before it at
+    the same evaluation, once ``startup_trials`` trials finished and after ``warmup_evaluations`` evaluations."""
+    return MedianPruner(n_startup_trials=startup_trials, n_warmup_steps=warmup_evaluations)
+
+
+def tpe_sampler(startup_trials: int, seed: int) -> TPESampler:
+    """The sampler of every study: ``startup_trials`` random trials, then multivariate TPE; the constant liar keeps
+    trials running side by side (processes or machines sharing the storage) from sampling the same point."""
     with warnings.catch_warnings():  # multivariate and constant_liar are "experimental" (stable since Optuna 2.2 and 2.8)
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        study.sampler = TPESampler(
-            n_startup_trials=settings.startup_trials,
-            seed=settings.seed + len(study.trials),
-            multivariate=True,
-            constant_liar=True,
-        )
-    return study
+        return TPESampler(n_startup_trials=startup_trials, seed=seed, multivariate=True, constant_liar=True)
 
 
 def finished_trials(study: optuna.Study) -> int:

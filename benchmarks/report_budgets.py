@@ -1,0 +1,143 @@
+"""The report's sections on budgets beyond the grid's env-step budget: each tuned learner against its defaults (with
+its tuning budget), the views at each env-step budget of an env, and the equal wall-clock budget.
+
+Verdicts are Welch's tests on the difference (:func:`benchmarks.significance.compare`), with
+:data:`SHORT_VIEW_SEEDS` seeds a side at an env's main (shortest) budget and :data:`LONG_VIEW_SEEDS` at the long and
+wall-clock budgets, whose runs cost up to 10x more.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from benchmarks import domains
+from benchmarks.groups import KINDS, Group
+from benchmarks.presets import base_config, is_tuned
+from benchmarks.report_text import comparison_text, fmt_ci, fmt_int, headline_pair, headline_verdicts, md_table
+from benchmarks.significance import MIN_SEEDS, compare
+
+SHORT_VIEW_SEEDS = MIN_SEEDS
+LONG_VIEW_SEEDS = 5
+
+
+def split_views(groups: dict[str, list[Group]]) -> tuple[dict[str, list[Group]], dict[str, list[Group]]]:
+    """Per env: the env-step groups, and the wall-clock groups."""
+    steps = {env: [g for g in gs if not g.seconds] for env, gs in groups.items()}
+    clock = {env: [g for g in gs if g.seconds] for env, gs in groups.items()}
+    return steps, {env: gs for env, gs in clock.items() if gs}
+
+
+def budget_verdicts(groups: dict[str, list[Group]], references: dict[str, Any]) -> list[str]:
+    """The headline verdicts at every env-step budget of each env (the shortest with :data:`SHORT_VIEW_SEEDS`
+    seeds a side, longer ones with :data:`LONG_VIEW_SEEDS`)."""
+    lines = []
+    for env_id, gs in groups.items():
+        budgets = sorted({g.budget for g in gs})
+        for rank, budget in enumerate(budgets):
+            seeds = SHORT_VIEW_SEEDS if rank == 0 else LONG_VIEW_SEEDS
+            lines += headline_verdicts({env_id: [g for g in gs if g.budget == budget]}, references, seeds)
+    return lines
+
+
+def _digits(env_id: str) -> tuple[str, int]:
+    return (" m", 1) if domains.is_dribbling(env_id) else ("", 3)
+
+
+def tuning_budget_text(group: Group) -> str:
+    """The tuning budget of a tuned group's settings, from its cells (``algo_config["tuning"]``)."""
+    record = (group.runs[0].get("algo_config") or {}).get("tuning") or {}
+    budget, best = record.get("budget") or {}, record.get("best") or {}
+    if not budget:
+        return "unknown"
+    value = best.get("value")
+    best_text = f"; best trial {best.get('trial')}: {value:.3g} on the tuning episodes" if value is not None else ""
+    return (
+        f"{budget.get('trials')} trials x {budget.get('env_steps', 0):,} env steps x {budget.get('seeds')} seed(s), "
+        f"seeds {budget.get('tuning_seeds')}, evaluation set {budget.get('eval_seed')}{best_text}"
+    )
+
+
+def tuned_section(groups: dict[str, list[Group]]) -> list[str]:
+    """Each tuned learner beside its default settings at the same budget, with the difference's verdict."""
+    rows = []
+    for env_id, gs in groups.items():
+        unit, digits = _digits(env_id)
+        for tuned in (g for g in gs if is_tuned(g.config)):
+            default = next(
+                (g for g in gs if (g.algo, g.config, g.budget) == (tuned.algo, base_config(tuned.config), tuned.budget)),
+                None,
+            )
+            if default is None:
+                verdict, default_text = "no default runs", "-"
+            else:
+                c = compare(tuned.final(), default.final(), min_seeds=LONG_VIEW_SEEDS)
+                verdict = comparison_text(c, "tuned", "default", unit, digits)
+                default_text = f"{fmt_ci(default.final(), digits)} ({len(default.runs)} seeds)"
+            rows.append(
+                [
+                    env_id,
+                    default.label if default else tuned.label,
+                    f"{tuned.budget:,}",
+                    default_text,
+                    f"{fmt_ci(tuned.final(), digits)} ({len(tuned.runs)} seeds)",
+                    verdict,
+                    tuning_budget_text(tuned),
+                ]
+            )
+    if not rows:
+        return []
+    return [
+        "## Tuned and default settings",
+        "",
+        "Every tuned learner's study had the same size (trials x env steps x tuning seeds, TPE with median pruning on "
+        "greedy evaluations; `benchmarks/tuning.py`); its tuning seeds and evaluation episodes are none of the grid's. "
+        "Final score IQM [95% CI] at the env-step budget:",
+        "",
+        md_table(["env", "learner", "env steps", "default", "tuned", "tuned - default", "tuning budget"], rows, "llrrrll"),
+        "",
+    ]
+
+
+def wall_clock_section(groups: dict[str, list[Group]]) -> list[str]:
+    """The equal wall-clock budget: per env a table of the groups and the best SarsaAAC config against the best of
+    each other kind of learner, at the same seconds of training."""
+    if not groups:
+        return []
+    lines = [
+        "## Equal wall-clock budget",
+        "",
+        "Every learner trains for the same seconds on one core (evaluations excluded), or until its env-step horizon "
+        "(the steps its algorithm usually makes in that time, over which its schedules run); the final evaluation is "
+        "the same as at the env-step budget.",
+        "",
+    ]
+    for env_id, gs in groups.items():
+        unit, digits = _digits(env_id)
+        rows = [
+            [
+                g.label,
+                str(len(g.runs)),
+                f"{g.seconds}",
+                fmt_int(np.mean(g.values("env_steps"))),
+                fmt_int(np.mean(g.values("episodes"))),
+                fmt_ci(g.final(), digits),
+                f"{sum(r.get('stopped_by') == 'time' for r in g.runs)}/{len(g.runs)}",
+            ]
+            for g in gs
+        ]
+        header = ["learner", "seeds", "seconds", "env steps", "episodes", "final score, IQM [95% CI]", "stopped by time"]
+        lines += [f"### {env_id}", "", md_table(header, rows), ""]
+        sarsa = headline_pair(gs, "SarsaAAC", LONG_VIEW_SEEDS)
+        for kind in KINDS:
+            other = headline_pair(gs, kind, LONG_VIEW_SEEDS) if kind != "SarsaAAC" else None
+            if sarsa is None or other is None:
+                continue
+            c = compare(sarsa.final(), other.final(), min_seeds=LONG_VIEW_SEEDS)
+            lines.append(
+                f"- {sarsa.label} vs the best {kind}, {other.label}, at {sarsa.seconds} s: "
+                f"{comparison_text(c, 'SarsaAAC', other.label, unit, digits)}."
+            )
+        lines.append("")
+    return lines
