@@ -145,8 +145,8 @@ def test_kernel_views_follow_load_state_dict_and_moves():
     [
         (dict(low=np.array([-np.inf, 0]), high=np.array([1, 1]), n_rbf=5), "RBF features need finite bounds"),
         (dict(low=np.array([1, 0]), high=np.array([1, 1])), "Need low < high"),
-        (dict(low=np.zeros(2), high=np.ones(2), hidden_units=0), "hidden_units must be >= 1"),
-        (dict(low=np.zeros(2), high=np.ones(2), n_rbf=0), "n_rbf must be >= 1"),
+        (dict(low=np.zeros(2), high=np.ones(2), hidden_units=0), "hidden_units must be a whole number >= 1"),
+        (dict(low=np.zeros(2), high=np.ones(2), n_rbf=0), "n_rbf must be a whole number >= 1"),
         (dict(low=np.zeros(2), high=np.ones(2), n_rbf=3, rbf_width=0.0), "rbf_width must be > 0"),
     ],
 )

@@ -145,7 +145,9 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         SarsaAACPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
     :param learning_rate: Critic learning rate (normalised, in ``[0, 1]``), or a schedule of the progress
-        remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``
+        remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``; None (the default) takes the policy's
+        ``default_learning_rate`` (0.1 per sample for the linear and MLP families, 0.5 for DeepPolicy's ObGD step),
+        as do the other two rates
     :param q_learning_rate: Action-type actor learning rate, or a schedule
     :param param_learning_rate: Parameter actor learning rate, or a schedule
     :param gamma: The discount factor
@@ -202,9 +204,9 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         self,
         policy: str | type[SarsaAACPolicy],
         env: GymEnv | str | None,
-        learning_rate: float | Schedule = 0.1,
-        q_learning_rate: float | Schedule = 0.1,
-        param_learning_rate: float | Schedule = 0.1,
+        learning_rate: float | Schedule | None = None,
+        q_learning_rate: float | Schedule | None = None,
+        param_learning_rate: float | Schedule | None = None,
         gamma: float = 0.9,
         type_exploration: str = "epsilon_greedy",
         exploration_fraction: float = 0.5,
@@ -228,7 +230,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         super().__init__(
             policy,
             env,
-            learning_rate,
+            learning_rate,  # type: ignore[arg-type]  # None until the policy's default is known, below
             policy_kwargs=policy_kwargs,
             stats_window_size=stats_window_size,
             tensorboard_log=tensorboard_log,
@@ -240,8 +242,10 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
             supported_action_spaces=None,
         )
         check_policy_class(self, SarsaAACPolicy)
-        self.q_learning_rate = q_learning_rate
-        self.param_learning_rate = param_learning_rate
+        default = self.policy_class.default_learning_rate  # type: ignore[attr-defined]  # a SarsaAACPolicy, checked
+        self.learning_rate = default if learning_rate is None else learning_rate
+        self.q_learning_rate = default if q_learning_rate is None else q_learning_rate
+        self.param_learning_rate = default if param_learning_rate is None else param_learning_rate
         self.gamma = gamma
         self.type_exploration = type_exploration
         self.exploration_fraction = exploration_fraction
