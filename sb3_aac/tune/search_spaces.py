@@ -16,6 +16,7 @@ import optuna
 from optuna.distributions import BaseDistribution, CategoricalDistribution, FloatDistribution, IntDistribution
 from stable_baselines3.common.base_class import BaseAlgorithm
 
+from sb3_aac.hppo import HybridPPO
 from sb3_aac.sarsa_aac import SarsaAAC
 
 
@@ -62,7 +63,7 @@ class SearchSpace:
         return kwargs
 
 
-ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"sarsa_aac": SarsaAAC}
+ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"sarsa_aac": SarsaAAC, "hppo": HybridPPO}
 
 # SarsaAAC's rates are normalised (1 moves a linear approximator onto its target), so they are searched on (0, 1].
 # A 40-trial study of RbfPolicy on RoboCupDribblePaper-v0 (50k steps, 3 seeds a trial) put its best trials at the
@@ -80,6 +81,23 @@ _SARSA_AAC = {
 }
 _RBF_WIDTH = FloatDistribution(0.5, 2.0)
 
+# HybridPPO: the ranges rl-zoo3 searches for PPO (its sample_ppo_params), with the parameter actor's clip range and
+# entropy coefficient beside the discrete actor's. Not yet run as a study.
+_HPPO = {
+    "learning_rate": FloatDistribution(1e-5, 3e-3, log=True),
+    "n_steps": CategoricalDistribution([64, 128, 256, 512, 1024]),
+    "batch_size": CategoricalDistribution([64, 128, 256, 512]),
+    "n_epochs": IntDistribution(3, 20),
+    "gamma": FloatDistribution(0.9, 0.9999),
+    "gae_lambda": FloatDistribution(0.8, 1.0),
+    "clip_range": FloatDistribution(0.05, 0.4),
+    "clip_range_params": FloatDistribution(0.05, 0.4),
+    "ent_coef": FloatDistribution(1e-5, 0.1, log=True),
+    "param_ent_coef": FloatDistribution(1e-6, 1e-2, log=True),
+    "vf_coef": FloatDistribution(0.2, 1.0),
+    "max_grad_norm": FloatDistribution(0.3, 5.0, log=True),
+}
+
 SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
     ("sarsa_aac", "MlpPolicy"): SearchSpace(_SARSA_AAC, {"hidden_units": IntDistribution(2, 40, log=True)}),
     ("sarsa_aac", "RbfMlpPolicy"): SearchSpace(
@@ -90,6 +108,7 @@ SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
     ("sarsa_aac", "TilePolicy"): SearchSpace(
         _SARSA_AAC, {"tiles_per_input": IntDistribution(4, 16), "n_tilings": IntDistribution(4, 16)}
     ),
+    ("hppo", "MlpPolicy"): SearchSpace(_HPPO, {"log_std_init": FloatDistribution(-2.0, 0.5)}),
 }
 
 
