@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from sb3_aac.common.output_files import replaced_atomically
+from sb3_aac.common.spaces import ParameterizedActionSpec
 from sb3_aac.common.tile_coding import TileBank
 from sb3_aac.runtime.format import (
     ARRAY_DTYPE,
@@ -69,6 +70,20 @@ def policy_arrays(policy: Any) -> dict[str, np.ndarray]:
     }
 
 
+def action_header(spec: ParameterizedActionSpec) -> dict[str, Any]:
+    """The header's ``action`` section: the layout, the types' parameter counts, shapes, dtypes and offsets."""
+    return {
+        "layout": spec.layout,
+        "n_types": spec.n_types,
+        "type_start": spec.start,
+        "n_params": spec.n_params,
+        "types": [
+            {"dim": dim, "shape": [int(s) for s in box.shape], "dtype": str(box.dtype), "offset": spec.offsets[j]}
+            for j, (dim, box) in enumerate(zip(spec.dims, spec.boxes, strict=True))
+        ],
+    }
+
+
 def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[str, Any]:
     """The JSON header (without the arrays table) describing a :class:`SarsaAACPolicy`."""
     from sb3_aac import __version__
@@ -87,16 +102,7 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
             "size": int(bank.n_inputs),
             "dtype": str(policy.observation_space.dtype),
         },
-        "action": {
-            "layout": spec.layout,
-            "n_types": k,
-            "type_start": spec.start,
-            "n_params": n_params,
-            "types": [
-                {"dim": dim, "shape": [int(s) for s in box.shape], "dtype": str(box.dtype), "offset": spec.offsets[j]}
-                for j, (dim, box) in enumerate(zip(spec.dims, spec.boxes, strict=True))
-            ],
-        },
+        "action": action_header(spec),
         "approximators": {
             "n_outputs": n_outputs,
             "outputs": outputs,
