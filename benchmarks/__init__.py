@@ -1,5 +1,5 @@
 """Benchmarks of sb3-aac: speed scripts (``algo_speed.py``, ``runtime_speed.py``; the env's is
-:mod:`robocup_dribble.speed`) and the learning benchmark of issue 5.
+:mod:`robocup_dribble.speed`) and the learning benchmark.
 
 The learning benchmark runs a grid of training runs (``python -m benchmarks.run --preset quick|full``), one JSON file
 per finished run, and turns those files into a report with figures (``python -m benchmarks.report DIR``):

@@ -13,7 +13,7 @@ cost growth with the number of features; and SarsaAAC's own cost on the array pa
 for ``--lanes`` lanes: a :class:`NullArrayEnv` with the dribbling env's spaces whose ``step_arrays`` costs almost
 nothing, so the figure is the algorithm's ceiling, which an array env's own cost then lowers.
 
-Targets (issue 12): RbfPolicy (10 per input) >= 300k env steps/s on ``DribbleVecEnv(256)``; on 16 lanes SarsaAAC on
+Targets: RbfPolicy (10 per input) >= 300k env steps/s on ``DribbleVecEnv(256)``; on 16 lanes SarsaAAC on
 ``DribbleVecEnv`` >= 20x PPO and >= 3x DQN (the "SarsaAAC+DribbleVecEnv" column's ratios).
 
 Usage: ``python benchmarks/algo_speed.py [--steps 20000] [--n-envs 16] [--policy RbfPolicy] [--torch-threads 1]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import json
+import math
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -38,14 +39,61 @@ def read_json_object(path: Path) -> dict[str, Any]:
     return data
 
 
+# The fields the runner, the report and the figures read, with the JSON types they need (see _type_errors).
+TRAINED_FIELDS = {"final": "scores", "curve": "curve", "env_steps": "count", "episodes": "count", "train_wall_s": "number",
+                  "wall_s": "number", "model": "text"}  # fmt: skip
+REFERENCE_FIELDS = {"references": "references", "wall_s": "number"}
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _is_scores(value: Any) -> bool:
+    """A mapping of names to finite numbers or lists of them (a final evaluation's summary and per-episode scores)."""
+    return isinstance(value, dict) and all(
+        _is_number(v) or (isinstance(v, list) and all(map(_is_number, v))) for v in value.values()
+    )
+
+
+_KINDS = {
+    "number": _is_number,
+    "count": lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 0,
+    "text": lambda v: isinstance(v, str),
+    "scores": _is_scores,
+    "curve": lambda v: isinstance(v, list) and all(_is_scores(point) for point in v),
+    "references": lambda v: isinstance(v, dict) and all(map(_is_reference, v.values())),
+}
+
+
+def _is_reference(value: Any) -> bool:
+    """A reference's result: numbers, labels, lists of numbers, and evaluations (see :func:`_is_scores`)."""
+    return isinstance(value, dict) and all(
+        isinstance(v, str) or _is_scores(v) or _is_scores({"value": v}) for v in value.values()
+    )
+
+
+def _type_errors(result: dict[str, Any]) -> list[str]:
+    """The fields of a cell result that are missing or of the wrong type, for the kind of cell it is."""
+    fields = REFERENCE_FIELDS if "references" in result else TRAINED_FIELDS
+    return [f"{key} ({kind})" for key, kind in fields.items() if not (key in result and _KINDS[kind](result[key]))]
+
+
 def read_cell_file(path: Path) -> dict[str, Any]:
-    """A finished cell's result. :raises ValueError: naming the file, if it is damaged or not a finished cell's."""
+    """
+    A finished cell's result, its fields checked to have the types the report reads.
+
+    :raises ValueError: naming the file and the fields, if it is damaged or not a finished cell's
+    """
     result = read_json_object(path)
     missing = [key for key in RESULT_KEYS if key not in result]
     if missing or not isinstance(result["cell"], dict) or not ("final" in result or "references" in result):
         raise ValueError(f"{path} is damaged (it lacks {missing or ['final or references']})")
     if result["cell_id"] != Path(path).stem:
         raise ValueError(f"{path} is damaged (it holds the result of cell {result['cell_id']!r})")
+    wrong = _type_errors(result)
+    if wrong:
+        raise ValueError(f"{path} is damaged (missing or wrong-typed fields: {', '.join(wrong)})")
     return result
 
 

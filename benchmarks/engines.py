@@ -1,4 +1,4 @@
-"""Engines that run a grid's cells somewhere else than the driver's own process pool: Ray (issue 13 item 7).
+"""Engines that run a grid's cells somewhere else than the driver's own process pool: Ray.
 
 :func:`benchmarks.execution.run_grid` hands the cells still to run to an engine (``engine.run(cells, out, record)``);
 without one it uses its local process pool (the default for one machine). An engine calls ``record(cell_id,
@@ -21,7 +21,9 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import shutil
+import socket
 import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -34,6 +36,10 @@ Record = Callable[[str, str, Any], None]
 # Set in every Ray worker process before it starts (numpy and torch read them at import): one BLAS/OpenMP thread
 # per cell, as the local pool does (benchmarks/execution.py explains why).
 WORKER_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+# How long the driver waits for a Ray cluster named by --address to accept a connection before giving up.
+CONNECT_TIMEOUT_S = 10.0
+# host:port of a cluster's GCS, or ray://host:port of its client server ("auto" is looked up by Ray itself).
+_ADDRESS = re.compile(r"^(?:ray://)?(?P<host>\[[^\]]+\]|[^:/\[\]]+):(?P<port>\d{1,5})$")
 # Variables of the driver a cell records (the command line, the invocation's provenance), passed to every task.
 FORWARDED_ENV_PREFIX = "SB3_AAC_BENCH_"
 
@@ -116,6 +122,27 @@ class RayEngine:
             raise ValueError(f"num_cpus must be >= 1, got {num_cpus}")
         self.address, self.num_cpus, self.max_retries, self.scratch_root = address, num_cpus, max_retries, scratch_root
         self.nodes: dict[str, str | None] = {}  # cell id -> the node that ran its recorded attempt
+
+    def check_address(self) -> None:
+        """
+        Check that a cluster listens at ``address`` (a TCP connection within :data:`CONNECT_TIMEOUT_S`), since Ray
+        itself retries an unreachable address for minutes. Nothing to check without an address or for ``"auto"``.
+
+        :raises ConnectionError: saying which address did not answer and how to start a cluster
+        """
+        if self.address is None or self.address == "auto":
+            return
+        match = _ADDRESS.match(self.address)
+        if match is None:
+            raise ConnectionError(f"--address {self.address!r} is not host:port, ray://host:port or 'auto'")
+        host, port = match["host"].strip("[]"), int(match["port"])
+        try:
+            socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S).close()
+        except OSError as error:
+            raise ConnectionError(
+                f"no Ray cluster answers at {self.address} within {CONNECT_TIMEOUT_S:.0f} s "
+                f"({error.strerror or error}); start one there (`ray start --head --port {port}`) or drop --address"
+            ) from None
 
     def _connect(self) -> bool:
         """Initialise Ray unless it already is; True if this call did (so :meth:`run` shuts it down)."""

@@ -1,12 +1,12 @@
 """
-Learning targets of SarsaAAC (issue 8): train each (task, policy) on several seeds and print the greedy score.
+Learning targets of SarsaAAC: train each (task, policy) on several seeds and print the greedy score.
 
     PYTHONPATH=.:envs python -m benchmarks.learning --seeds 3
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-mlp2,nav-tile --seeds 5
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-tile --seeds 5 --steps 80000 --eval-every 5000
 
-Issue 8's targets, one pair at a time (a full run is long), each with ``--seeds 5 --eval-every 10000``:
+The targets, one pair at a time (a full run is long), each with ``--seeds 5 --eval-every 10000``:
 ``paper-tile`` (25 m within 5,000 episodes; metres at the budget), ``v19-tile`` (25.4 m), ``paper-mlp2`` and
 ``paper-rbfmlp2`` (16 m; add ``--steps`` for 40,000 and 15,000 episodes), ``paper-rbf50`` (25 m within 10,000
 episodes), ``nav-tile`` (0.9 success within 300k steps), ``platform-tile`` (0.98 mean return).
@@ -17,7 +17,7 @@ navigation env). Each line prints the per-seed scores, their mean and their inte
 training episodes and env steps, and the training speed. Runs are single-threaded and seeded. The IQM's 95 % CI is a
 percentile bootstrap over seeds (10,000 resamples). With ``--eval-every N`` the greedy score is also measured every
 ``N`` env steps (on fewer episodes: 200 dribbling, 50 return, 200 navigation) and each line adds the training
-episodes at which every seed first reached the task's target (issue 8), ``-`` for a seed that did not.
+episodes at which every seed first reached the task's target, ``-`` for a seed that did not.
 """
 
 from __future__ import annotations
@@ -124,7 +124,7 @@ TASKS: dict[str, tuple[Callable[[int], VecEnv], int, dict[str, Any], Score]] = {
 }
 
 
-# The greedy score each task's target asks for (issue 8); the paper's MLP policies are asked for 16 m.
+# The greedy score each task's target asks for; the paper's MLP policies are asked for 16 m.
 TARGETS = {"paper": 25.0, "v19": 25.4, "platform": 0.98, "nav": 0.9, "toy": 9.0}
 MLP_PAPER_TARGET = 16.0
 
@@ -157,7 +157,7 @@ class TargetWatch(BaseCallback):
         if self.num_timesteps >= self.next_check:
             self.next_check += self.every
             value = self.score(self.model, True)  # type: ignore[arg-type]
-            episodes = self.model._episode_num  # type: ignore[attr-defined]
+            episodes = self.model.episode_num  # type: ignore[attr-defined]
             self.curve.append((episodes, value))
             if self.reached_at is None and value >= self.target:
                 self.reached_at = episodes
@@ -187,7 +187,7 @@ def run(
         model.learn(budget, callback=watch, log_interval=None)
         # With a watch the time includes its evaluations: the speed is printed without one only.
         speeds.append(budget / (time.perf_counter() - start))
-        episodes.append(model._episode_num)
+        episodes.append(model.episode_num)
         scores.append(score(model, False))
         if watch is not None:
             reached.append(watch.reached_at)

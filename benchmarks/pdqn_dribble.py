@@ -45,7 +45,7 @@ class EvaluateAtBudgets(BaseCallback):
                 seed=self.seed,
                 budget=budget,
                 env_steps=self.num_timesteps,
-                episodes=self.model._episode_num,
+                episodes=self.model.episode_num,
                 train_s=round(train_s, 1),
                 distance_mean=round(float(report.mean_distance), 2),
                 distance_median=round(float(np.median(report.distances)), 2),

@@ -45,7 +45,7 @@ class GreedyEvaluation(BaseCallback):
         if self.num_timesteps >= self.next_eval:
             self.next_eval += self.every
             mean, _ = evaluate_policy(self.model, self.eval_env, self.episodes, deterministic=True)
-            row = dict(steps=self.num_timesteps, episodes=self.model._episode_num, mean_return=round(float(mean), 4))
+            row = dict(steps=self.num_timesteps, episodes=self.model.episode_num, mean_return=round(float(mean), 4))
             self.history.append(row)
             print(json.dumps(row), flush=True)
         return True
@@ -84,7 +84,7 @@ def main() -> None:
                 algo=algo.__name__,
                 seed=args.seed,
                 env_steps=model.num_timesteps,
-                episodes=model._episode_num,
+                episodes=model.episode_num,
                 train_seconds=round(seconds, 1),
                 final_mean_return=round(float(np.mean(returns)), 4),
                 final_episodes=len(returns),

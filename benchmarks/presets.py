@@ -9,7 +9,7 @@ Three domains (:mod:`benchmarks.domains`): the dribbling envs of both server era
 SarsaAAC configs (:data:`SARSA_CONFIGS`): the recommended ``TilePolicy`` with its defaults, and the paper's three
 families (Uc-Cetina 2013, Figs. 5-7), all other hyperparameters at the SarsaAAC defaults (16 lanes):
 
-* ``tile``: ``TilePolicy`` (hashed tilings over the inputs and their pairs; the README's recommendation);
+* ``tile``: ``TilePolicy`` (hashed tilings over the inputs and their pairs; the recommended policy, docs/sarsa_aac.md);
 * ``mlp2/10/20``: ``MlpPolicy`` with 2, 10, 20 hidden tanh units per approximator;
 * ``rbfmlp2/10/20``: ``RbfMlpPolicy``, a filter layer of 10 Gaussian RBFs per input, then 2, 10, 20 hidden units;
 * ``rbf10/30/50``: ``RbfPolicy``, arrays of 10, 30, 50 Gaussian RBFs per input, linear output.
@@ -43,7 +43,7 @@ EVAL_SEED = 10_000  # the learning curves: `eval_episodes` greedy episodes every
 FINAL_SEED = 20_000  # the final evaluation of a trained model (`final_episodes` greedy episodes)
 RELIABILITY_SEED = 30_000  # the reliability test (10,000 fresh players, one episode each)
 
-SARSA_N_ENVS = 16  # lanes for SarsaAAC (the README's setting)
+SARSA_N_ENVS = 16  # lanes for SarsaAAC (the quick start's setting)
 
 # name: (family, policy, policy_kwargs)
 SARSA_CONFIGS: dict[str, tuple[str, str, dict[str, Any]]] = {

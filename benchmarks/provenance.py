@@ -1,4 +1,4 @@
-"""Provenance of a benchmark sweep (issue 13 item 8): which source ran it, and a log of every invocation.
+"""Provenance of a benchmark sweep: which source ran it, and a log of every invocation.
 
 * :func:`git_state` / :func:`require_clean_tree`: a sweep refuses to start from a git tree with uncommitted changes
   to tracked files (the results then name a commit that did not produce them), unless told ``--allow-dirty``.

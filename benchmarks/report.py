@@ -93,7 +93,7 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         paper_claims(groups, reliability),
         "",
         "The paper's runs were on a real rcssserver 11 with reward constants, parameter meanings and exploration we had "
-        "to choose ourselves (see `../shared/ref/paper-notes.md` and the env's README); its episode counts are for "
+        "to choose ourselves (see `docs/robocup_dribble.md` and `docs/sarsa_aac.md`); its episode counts are for "
         "one learner, ours come from 16 lanes learning together.",
         "",
     ]

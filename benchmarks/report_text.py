@@ -17,7 +17,7 @@ from benchmarks.provenance import invocations
 from benchmarks.significance import MIN_SEEDS, compare, iqm, target_verdict
 from benchmarks.significance import verdict as difference_verdict
 
-PAPER_CLAIM_SEEDS = 5  # the paper's configs run 5 seeds (issue 8's targets); their claims are tested with these
+PAPER_CLAIM_SEEDS = 5  # the paper's configs run 5 seeds (benchmarks.learning's targets); their claims are tested with these
 REACH_MARKS = {"dribbling": (20.0, 25.0), "platform": (0.9, 0.98)}  # the cost table's "to reach" columns
 
 

@@ -53,23 +53,35 @@ from benchmarks.provenance import (
     require_clean_tree,
 )
 from benchmarks.reliability import RELIABILITY_PLAYERS, run_reliability
+from sb3_aac.common.output_files import check_writable_dir
 
 
 def _exit_on_sigterm(signum: int, frame: Any) -> None:
     raise SystemExit(128 + signum)
 
 
+def _positive_int(text: str) -> int:
+    """An argparse type: a whole number >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.run", description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", choices=sorted(PRESETS), help="the grid to run")
     parser.add_argument("--out", default=None, help="results directory (default: runs/bench-<preset>)")
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (1: run in this process)")
+    parser.add_argument("--workers", type=_positive_int, default=2, help="worker processes (1: run in this process)")
     parser.add_argument(
         "--only", default=None, help="comma-separated glob patterns of cell ids (a plain word matches as a substring)"
     )
     parser.add_argument("--list", action="store_true", help="list the cells (and whether they are finished), run nothing")
     parser.add_argument("--reliability", action="store_true", help="run the reliability test of the best policies in --out")
-    parser.add_argument("--players", type=int, default=RELIABILITY_PLAYERS, help="players of the reliability test")
+    parser.add_argument("--players", type=_positive_int, default=RELIABILITY_PLAYERS, help="players of the reliability test")
     parser.add_argument(
         "--engine", choices=("local", "ray"), default="local", help="local process pool, or one Ray task per cell"
     )
@@ -88,11 +100,19 @@ def main(argv: list[str] | None = None) -> int:
     if args.address and args.engine != "ray":
         parser.error("--address needs --engine ray")
     out = Path(args.out or f"runs/bench-{args.preset or 'full'}")
+    if not args.list:
+        try:
+            check_writable_dir(out, "--out")
+        except ValueError as error:
+            parser.error(str(error))
     os.environ["SB3_AAC_BENCH_COMMAND"] = "python -m benchmarks.run " + " ".join(
         shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv)
     )
     if args.preset:
-        grid = select(build_cells(args.preset), args.only)
+        every = build_cells(args.preset)
+        grid = select(every, args.only)
+        if not grid:
+            parser.error(f"--only {args.only!r} matches none of the {len(every)} cells of preset {args.preset!r} (see --list)")
         if args.list:
             for cell in grid:
                 print(f"{'done' if cells.is_finished(out, cell) else 'todo'}  {cell.cell_id}")
@@ -110,12 +130,14 @@ def main(argv: list[str] | None = None) -> int:
                 state = require_clean_tree(REPO, args.allow_dirty, ignore=(out,))
                 os.environ[ENV_VAR] = json.dumps(invocation_provenance(invocation, state, args.allow_dirty))
                 engine = RayEngine(args.address, num_cpus=args.workers) if args.engine == "ray" else None
+                if engine is not None:
+                    engine.check_address()
                 try:
                     status = run_grid(grid, out, args.workers, engine=engine)
                 finally:
                     del os.environ[ENV_VAR]  # later run_grid calls of this process are not this invocation's
                 log.update({k: len(v) for k, v in status.items()})
-        except DirtyTreeError as error:
+        except (DirtyTreeError, ConnectionError) as error:
             print(f"refused: {error}", file=sys.stderr)
             return 2
         print(

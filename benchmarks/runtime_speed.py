@@ -12,8 +12,8 @@ the numbers.
 
 Usage: ``python benchmarks/runtime_speed.py [--quick] [--calls 5000] [--repeats 5]``
 
-Targets: <= 10 us per decision for the RBF policy with 10, 30 and 50 RBFs per input (issue 4); <= 5 us at 50 RBFs
-per input with the default RBF window (issue 12), decisions identical to ``model.predict`` (tested in
+Targets: <= 10 us per decision for the RBF policy with 10, 30 and 50 RBFs per input; <= 5 us at 50 RBFs
+per input with the default RBF window, decisions identical to ``model.predict`` (tested in
 ``tests/test_export.py``).
 """
 

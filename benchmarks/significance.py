@@ -27,7 +27,7 @@ from typing import Any, Literal
 import numpy as np
 from scipy import stats
 
-MIN_SEEDS = 10  # seeds per side below which no comparison or target verdict is given (issue 13: headline pairs)
+MIN_SEEDS = 10  # seeds per side below which no comparison or target verdict is given (headline pairs)
 ALPHA = 0.05
 BOOTSTRAP_RESAMPLES = 10_000
 CONFIDENCE = 0.95

@@ -94,7 +94,7 @@ def soak_training(steps: int, save_every: int, profile: str, seed: int, folder: 
     left = sorted(p.name for p in folder.iterdir() if p.name not in expected)
     return {
         "steps": int(model.num_timesteps),
-        "episodes": int(model._episode_num),
+        "episodes": int(model.episode_num),
         "seconds": round(seconds, 1),
         "steps_per_s": round(model.num_timesteps / seconds),
         "saves_and_reloads": callback.saves,

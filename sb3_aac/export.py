@@ -18,10 +18,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 
 from sb3_aac.common.output_files import replaced_atomically
 from sb3_aac.common.spaces import ParameterizedActionSpec
-from sb3_aac.common.tile_coding import TileBank
+from sb3_aac.sarsa_aac.policies import DenseBankPolicy, TilePolicy
 from sb3_aac.runtime.format import (
     ARRAY_DTYPE,
     FORMAT_NAME,
@@ -35,39 +36,41 @@ from sb3_aac.runtime.format import (
 )
 
 
-def _policy_of(model: Any) -> Any:
-    from sb3_aac.sarsa_aac.policies import SarsaAACPolicy
+ExportablePolicy = DenseBankPolicy | TilePolicy
+"""The policies the format describes: the numpy banks of the dense families and of tile coding."""
 
+
+def _policy_of(model: Any) -> ExportablePolicy:
     policy = getattr(model, "policy", model)
-    if not isinstance(policy, SarsaAACPolicy):
-        raise ValueError(f"export_policy needs a SarsaAAC model or a SarsaAACPolicy, got {type(model).__name__}")
+    if not isinstance(policy, (DenseBankPolicy, TilePolicy)):
+        raise ValueError(
+            "export_policy needs a SarsaAAC model or a SarsaAACPolicy on a numpy bank (MlpPolicy, RbfMlpPolicy, "
+            f"RbfPolicy, TilePolicy or their subclasses), got {type(model).__name__}"
+        )
     return policy
 
 
-def policy_arrays(policy: Any) -> dict[str, np.ndarray]:
-    """The arrays of the file format, as float64 numpy arrays, from a :class:`SarsaAACPolicy`."""
-    bank = policy.approximators
-    d = bank.n_inputs
-    space = policy.observation_space
+def policy_arrays(policy: ExportablePolicy) -> dict[str, np.ndarray]:
+    """The arrays of the file format, as float64 numpy arrays, from a dense-bank or tile policy."""
+    box = policy.observation_space
+    assert isinstance(box, spaces.Box)  # SarsaAAC policies take Box observations only
+    bank = policy.approximators.arrays()
+    d = policy.approximators.n_inputs
     arrays = {
-        "obs_low": np.broadcast_to(np.asarray(space.low, dtype=np.float64).ravel(), (d,)),
-        "obs_high": np.broadcast_to(np.asarray(space.high, dtype=np.float64).ravel(), (d,)),
-        "obs_mid": bank.obs_mid,
-        "obs_half": bank.obs_half,
+        "obs_low": np.broadcast_to(np.asarray(box.low, dtype=np.float64).ravel(), (d,)),
+        "obs_high": np.broadcast_to(np.asarray(box.high, dtype=np.float64).ravel(), (d,)),
+        "obs_mid": bank["obs_mid"],
+        "obs_half": bank["obs_half"],
         "param_low": policy.spec.low,
         "param_high": policy.spec.high,
     }
-    if isinstance(bank, TileBank):
+    if isinstance(policy, TilePolicy):
         names = [name for name in TILE_ARRAYS if name not in arrays]
     else:
-        names = ["rbf_centers", "rbf_widths"] if bank.n_rbf is not None else []
-        names += ["weight", "bias"] if bank.hidden_units is None else ["weight1", "bias1", "weight2", "bias2"]
-    for name in names:
-        arrays[name] = getattr(bank, name)
-    return {
-        name: np.ascontiguousarray((v.detach().cpu().numpy() if hasattr(v, "detach") else np.asarray(v)).astype(ARRAY_DTYPE))
-        for name, v in arrays.items()
-    }
+        names = ["rbf_centers", "rbf_widths"] if policy.n_rbf is not None else []
+        names += ["weight", "bias"] if policy.hidden_units is None else ["weight1", "bias1", "weight2", "bias2"]
+    arrays.update((name, bank[name]) for name in names)
+    return {name: np.ascontiguousarray(np.asarray(v).astype(ARRAY_DTYPE)) for name, v in arrays.items()}
 
 
 def action_header(spec: ParameterizedActionSpec) -> dict[str, Any]:
@@ -84,13 +87,15 @@ def action_header(spec: ParameterizedActionSpec) -> dict[str, Any]:
     }
 
 
-def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The JSON header (without the arrays table) describing a :class:`SarsaAACPolicy`."""
+def policy_header(policy: ExportablePolicy, metadata: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The JSON header (without the arrays table) describing a dense-bank or tile policy."""
     from sb3_aac import __version__
 
     bank, spec = policy.approximators, policy.spec
     k, n_params = spec.n_types, spec.n_params
     n_outputs, outputs = output_layout(k, n_params)
+    obs_shape = policy.observation_space.shape
+    assert obs_shape is not None  # SarsaAAC policies take Box observations only
     return {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
@@ -98,7 +103,7 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
         "algorithm": "SarsaAAC",
         "policy_class": type(policy).__name__,
         "observation": {
-            "shape": [int(s) for s in policy.observation_space.shape],
+            "shape": [int(s) for s in obs_shape],
             "size": int(bank.n_inputs),
             "dtype": str(policy.observation_space.dtype),
         },
@@ -107,17 +112,21 @@ def policy_header(policy: Any, metadata: dict[str, Any] | None = None) -> dict[s
             "n_outputs": n_outputs,
             "outputs": outputs,
             "features": _features_header(policy),
-            "head": (
-                {"type": "linear"} if bank.hidden_units is None else {"type": "tanh_mlp", "hidden_units": bank.hidden_units}
-            ),
+            "head": _head_header(policy),
         },
         "metadata": dict(metadata or {}),
     }
 
 
-def _features_header(policy: Any) -> dict[str, Any]:
-    bank = policy.approximators
-    if isinstance(bank, TileBank):
+def _head_header(policy: ExportablePolicy) -> dict[str, Any]:
+    if isinstance(policy, TilePolicy) or policy.hidden_units is None:
+        return {"type": "linear"}
+    return {"type": "tanh_mlp", "hidden_units": policy.hidden_units}
+
+
+def _features_header(policy: ExportablePolicy) -> dict[str, Any]:
+    if isinstance(policy, TilePolicy):
+        bank = policy.approximators
         return {
             "type": "tiles",
             "groups": [list(group) for group in bank.groups],
@@ -127,15 +136,16 @@ def _features_header(policy: Any) -> dict[str, Any]:
             "group_size": int(np.shape(bank.tile_inputs)[1]),
             "n_features": bank.n_features,
         }
-    if bank.n_rbf is None:
-        return {"type": "scaled", "n_features": bank.n_features}
-    window = None if bank.rbf_window is None else float(bank.rbf_window)
+    dense = policy.approximators
+    if policy.n_rbf is None:
+        return {"type": "scaled", "n_features": dense.n_features}
+    window = None if policy.rbf_window is None else float(policy.rbf_window)
     return {
         "type": "rbf",
-        "n_rbf": bank.n_rbf,
+        "n_rbf": policy.n_rbf,
         "rbf_width": float(policy.rbf_width),
         "rbf_window": window,
-        "n_features": bank.n_features,
+        "n_features": dense.n_features,
     }
 
 

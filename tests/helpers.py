@@ -1,11 +1,63 @@
-"""Shared test constants and tiny envs (imported by the test modules)."""
+"""Shared test constants, the registry of algorithms the feature tests run, and tiny envs."""
+
+from dataclasses import dataclass, field
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import pytest
 from gymnasium import spaces
+
+from sb3_aac import MPDQN, PDQN, SarsaAAC
 
 POLICIES = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy"]
 LAYOUTS = ["nested", "flat", "shared", "oneof"]
+# P-DQN / MP-DQN small and fast: learning from step 50 on minibatches of 16, one hidden layer of 16.
+PDQN_SMALL = dict(learning_starts=50, batch_size=16, policy_kwargs=dict(net_arch=[16]))
+
+
+@dataclass(frozen=True)
+class Algo:
+    """One algorithm configuration of the feature tests (tests that every algorithm of the package must pass)."""
+
+    algo: type[Any]  # the algorithm class
+    policy: str  # a key of its policy_aliases
+    cli: str  # its name for ``sb3-aac train --algo`` and rl-zoo3
+    kwargs: dict[str, Any] = field(default_factory=dict)  # small, fast settings for tests
+    own_tags: tuple[str, ...] = ()  # the log keys of its own (besides tests/test_logging.py's COMMON_TAGS)
+    log_often: dict[str, Any] = field(default_factory=dict)  # settings under which log_interval alone sets the dumps
+    exported: bool = False  # whether ``sb3-aac train --out`` also writes the policy as a .aacp file
+
+    @property
+    def id(self) -> str:
+        return f"{self.algo.__name__}-{self.policy}"
+
+    def make(self, env: Any, **kwargs: Any) -> Any:
+        """The algorithm on ``env`` with the case's policy and settings, ``kwargs`` on top."""
+        return self.algo(self.policy, env, **{**self.kwargs, **kwargs})
+
+
+_SARSA_AAC_TAGS = (
+    *("rollout/type_freq_1", "train/td_error_abs_mean", "train/q_loss", "train/param_update_fraction", "train/param_noise"),
+)
+_PDQN_TAGS = ("train/actor_loss", "train/learning_rate", "train/actor_learning_rate")
+# Every algorithm, and SarsaAAC with each policy: a new algorithm (or policy) joins the feature tests by one line.
+ALGOS = [
+    # RbfPolicy first: the SarsaAAC case of ALGO_CLASSES.
+    *(
+        Algo(SarsaAAC, name, "sarsa_aac", own_tags=_SARSA_AAC_TAGS, log_often=dict(log_min_timesteps=0), exported=True)
+        for name in ("RbfPolicy", "MlpPolicy", "RbfMlpPolicy", "TilePolicy")
+    ),
+    Algo(PDQN, "MlpPolicy", "pdqn", PDQN_SMALL, _PDQN_TAGS),
+    Algo(MPDQN, "MlpPolicy", "mpdqn", PDQN_SMALL, _PDQN_TAGS),
+]
+# One case per algorithm class (the first listed), for the tests of what the policy does not change.
+ALGO_CLASSES = [case for i, case in enumerate(ALGOS) if all(other.algo is not case.algo for other in ALGOS[:i])]
+
+
+def algos(cases: list[Algo] = ALGOS) -> Any:
+    """``@algos()``: parametrise a test's ``case`` argument over ``cases``, with readable ids."""
+    return pytest.mark.parametrize("case", cases, ids=[case.id for case in cases])
 
 
 class OneStepEnv(gym.Env):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import torch as th
 
-from sb3_aac.common.approximators import ApproximatorBank, rbf_layout, step_normalisers
+from sb3_aac.sarsa_aac.approximators import ApproximatorBank, rbf_layout, step_normalisers
 
 CONFIGS = {
     "mlp": dict(n_rbf=None, hidden_units=5),
@@ -187,7 +187,7 @@ def test_disjoint_samples_keep_their_own_weight_steps():
 def test_rbf_window_is_the_masked_dense_features(n_rbf: int, rbf_window: float) -> None:
     """Windowed features equal the dense ones where z * z <= r**2 / 2 and are exactly 0 elsewhere, bit for bit,
     for a large batch (the gathered window), a small one (dense, then the mask) and one observation."""
-    from sb3_aac.runtime import WINDOW_MIN_ROWS, BankForward
+    from sb3_aac.runtime.forward import WINDOW_MIN_ROWS, BankForward
 
     rng = np.random.default_rng(n_rbf)
     low, high = rng.uniform(-5, 0, 6), rng.uniform(1, 5, 6)

@@ -293,6 +293,7 @@ def synthetic_cell(env_id: str, algo: str, config: str, seed: int, final: float,
         "predict_us": 40.0 if algo == "SarsaAAC" else 300.0,
         "wall_s": 22.0,
         "loadavg": {"start": 2.0, "end": 2.5},
+        "model": f"models/{cell.cell_id}.zip",
     }
 
 
@@ -407,3 +408,59 @@ def test_a_claim_is_not_refuted_by_runs_that_stopped_before_it():
     assert _reach_claim(group, 16.0, 15_000)[1] == "not tested (runs ended before 15,000 episodes)"
     assert _reach_claim(group, 16.0, None)[1] == "not met"  # a claim about the end of these runs is refuted
     assert _reach_claim(group, 1.0, 15_000)[1] == "met"  # reached before stopping: met whatever came later
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("final", {"distance_mean": "25 m"}), ("curve", [{"episodes": None}]), ("env_steps", -1), ("wall_s", "fast")],
+)
+def test_a_cell_file_with_a_wrong_typed_field_is_damaged(tmp_path, field, value):
+    result = synthetic_cell(ENV_ID, "SarsaAAC", "rbf10", 0, 20.0, "RBF")
+    path = cell_files.cell_path(tmp_path, result["cell_id"])
+    path.parent.mkdir(parents=True)
+    path.write_text(json.dumps({**result, field: value}))
+    cell = Cell.from_dict(result["cell"])
+    with pytest.warns(UserWarning, match=f"wrong-typed fields: {field}"):
+        assert not cell_files.is_finished(tmp_path, cell)  # so the runner computes it again
+    results, damaged = cell_files.read_cells(tmp_path)
+    assert results == [] and len(damaged) == 1 and field in damaged[0]  # the report names it instead of crashing
+    path.write_text(json.dumps(result))
+    assert cell_files.is_finished(tmp_path, cell)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--only", "no-such-cell"], "matches none of the"),
+        (["--workers", "-3"], "must be >= 1"),
+        (["--workers", "two"], "expected a whole number"),
+        (["--players", "0"], "must be >= 1"),
+    ],
+)
+def test_runner_refuses_bad_arguments_before_any_work(tmp_path, capsys, argv, message):
+    with pytest.raises(SystemExit) as info:
+        bench_run.main(["--preset", "quick", "--out", str(tmp_path / "out"), *argv])
+    assert info.value.code == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "out" / "cells").exists()
+
+
+def test_runner_refuses_an_unwritable_out(tmp_path, capsys):
+    (tmp_path / "file").write_text("")
+    with pytest.raises(SystemExit) as info:
+        bench_run.main(["--preset", "quick", "--out", str(tmp_path / "file" / "out")])
+    assert info.value.code == 2 and "cannot write --out" in capsys.readouterr().err
+
+
+def test_runner_gives_up_on_an_address_where_no_ray_cluster_listens(tmp_path, capsys):
+    import socket
+    import time
+
+    with socket.socket() as probe:  # a port nobody listens on (bound, then released)
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    start = time.monotonic()
+    argv = ["--preset", "quick", "--out", str(tmp_path), "--engine", "ray", "--address", f"127.0.0.1:{port}", "--allow-dirty"]
+    assert bench_run.main(argv) == 2
+    assert time.monotonic() - start < 30
+    err = capsys.readouterr().err
+    assert f"no Ray cluster answers at 127.0.0.1:{port}" in err and "ray start --head" in err

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from sb3_aac.cli import main
+from tests.helpers import algos
 
 
 def run_error(capsys, argv: list[str]) -> str:
@@ -54,6 +55,22 @@ def test_train_episodes_tensorboard_other_env(tmp_path: Path, capsys) -> None:
     assert main(["train", "--env", "sb3_aac/ParameterizedTarget-v0", "--policy", "MlpPolicy", "--timesteps", "200",
                  "--n-envs", "2", "--eval-episodes", "3", "--progress-bar"]) == 0  # fmt: skip
     assert "greedy evaluation over 3 episodes: return" in capsys.readouterr().out
+
+
+@algos()
+def test_train_every_algorithm(tmp_path: Path, capsys, case) -> None:
+    assert main(["train", "--algo", case.cli, "--policy", case.policy, "--env", "sb3_aac/ParameterizedTarget-v0",
+                 "--timesteps", "300", "--n-envs", "2", "--eval-episodes", "3", "--out", str(tmp_path),
+                 "--set", "gamma=0.8", "--tensorboard", str(tmp_path / "tb")]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    name = case.algo.__name__
+    assert f"training {name} {case.policy}" in out and "greedy evaluation over 3 episodes: return" in out
+    assert (tmp_path / "policy.aacp").exists() == case.exported  # the .aacp format carries SarsaAAC's banks only
+    run = json.loads((tmp_path / "run.json").read_text())
+    assert run["algo"] == case.cli and run["policy"] == case.policy
+    assert list((tmp_path / "tb").glob(f"{name}_{case.policy}_1/events.out.tfevents.*"))
+    model = case.algo.load(tmp_path / "model.zip")
+    assert model.gamma == 0.8 and type(model.policy) is case.algo.policy_aliases[case.policy]
 
 
 @pytest.mark.parametrize("model", ["model.zip", "policy.aacp", "dir"])
@@ -126,8 +143,8 @@ def test_module_entry_point() -> None:
 @pytest.mark.parametrize(
     "argv, message",
     [
-        (["train", "--timesteps", "0"], "must be positive"),
-        (["train", "--episodes", "-3"], "must be positive"),
+        (["train", "--timesteps", "0"], "must be in 1 .."),
+        (["train", "--episodes", "-3"], "must be in 1 .."),
         (["train", "--timesteps", "10", "--episodes", "10"], "not allowed with"),
         (["train", "--env", "Nope-v0"], "unknown env id 'Nope-v0'"),
         (["train", "--set", "nonsense=1"], "valid keys: .*gamma"),
@@ -139,7 +156,7 @@ def test_module_entry_point() -> None:
         (["train", "--gym-package", "no_such_module_xyz"], "cannot be imported"),
         (["train", "--gym-package", "."], "cannot be imported"),
         (["evaluate", "missing.zip"], "does not exist"),
-        (["evaluate", "dribbler", "--episodes", "0"], "must be positive"),
+        (["evaluate", "dribbler", "--episodes", "0"], "must be in 1 .."),
         (["reliability", "dribbler", "--out", "figure.jpg"], "must end with .png"),
         (["render", "dribbler", "--out", "clip.avi"], "must end with .gif or .mp4"),
         (["export", "missing.zip", "out.aacp"], "does not exist"),
@@ -231,14 +248,65 @@ def test_damaged_models_are_one_line(trained: Path, tmp_path: Path, capsys) -> N
         assert "not a regular file" in run_error(capsys, ["export", str(tmp_path / "zero.zip"), str(tmp_path / "x.aacp")])
 
 
-def test_train_out_replaces_the_set_and_keeps_other_files(trained: Path, tmp_path: Path, capsys) -> None:
+def test_train_out_overwrite_replaces_the_runs_files_and_keeps_other_files(trained: Path, tmp_path: Path, capsys) -> None:
     import shutil
 
     out = tmp_path / "run"
     shutil.copytree(trained, out)
     (out / "reliability.png").write_bytes(b"png")
     assert main(["train", "--policy", "RbfPolicy", "--timesteps", "200", "--n-envs", "2", "--seed", "7", "--out", str(out),
-                 "--eval-episodes", "0", "--set", "n_rbf=3"]) == 0  # fmt: skip
+                 "--eval-episodes", "0", "--set", "n_rbf=3", "--overwrite"]) == 0  # fmt: skip
     assert json.loads((out / "run.json").read_text())["seed"] == 7
     assert (out / "reliability.png").read_bytes() == b"png"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"] and not list(out.glob(".*"))
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["train", "--n-envs", "100000000000"], "--n-envs: must be in 1 .. 65,536"),
+        (["train", "--seed", str(2**70)], "--seed: must be in 0 .. 4294967295"),
+        (["train", "--timesteps", "1" + "0" * 13], "--timesteps: must be in 1 .. 1e+11"),
+        (["train", "--episodes", "0"], "--episodes: must be in 1 .. 10,000,000"),
+        (["evaluate", "dribbler", "--episodes", str(10**20)], "--episodes: must be in 1 .. 10,000,000"),
+        (["evaluate", "dribbler", "--seed", "-1"], "--seed: must be in 0 .. 4294967295"),
+        (["render", "dribbler", "--fps", "1e-300"], "--fps: must be in 0.1 .. 1000 frames per second"),
+        (["tune", "--n-envs", "1e11"], "--n-envs: expected a whole number, got '1e11'"),
+    ],
+)
+def test_sizes_and_numbers_beyond_their_limits_are_one_line(capsys, argv, message) -> None:
+    assert message in run_error(capsys, argv)
+
+
+@pytest.mark.parametrize("keep", [True, False])
+def test_ctrl_c_during_train_saves_the_model_so_far_or_says_so(tmp_path: Path, capsys, monkeypatch, keep) -> None:
+    from sb3_aac import SarsaAAC
+    from sb3_aac.cli import train
+
+    def interrupted_learn(model, args, total_timesteps):
+        model.learn(200)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(train, "learn", interrupted_learn)
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit) as info:
+        main(["train", "--timesteps", "1000", "--n-envs", "2", "--eval-episodes", "0", *(["--out", str(out)] if keep else [])])
+    assert info.value.code == 130
+    printed = capsys.readouterr().out
+    if keep:
+        assert "interrupted after 200 steps: saving the model trained so far" in printed and "saved" in printed
+        assert SarsaAAC.load(out / "model.zip").num_timesteps == 200
+        assert json.loads((out / "run.json").read_text())["interrupted"] is True
+    else:
+        assert "interrupted after 200 steps: nothing was kept (give --out DIR to keep a run)" in printed
+
+
+def test_out_keeps_the_users_files_unless_overwrite(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "model.zip").write_text("the user's own model")
+    argv = ["train", "--timesteps", "100", "--n-envs", "2", "--eval-episodes", "0", "--out", str(out)]
+    assert "already holds model.zip: pass --overwrite" in run_error(capsys, argv)
+    assert (out / "model.zip").read_text() == "the user's own model"
+    assert main([*argv, "--overwrite"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["model.zip", "policy.aacp", "run.json"]

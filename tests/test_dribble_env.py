@@ -490,3 +490,32 @@ def test_tuple_actions_of_any_real_layout_step_like_their_arrays(make_part):
         actions = [(int(k), tuple(make_part(p[s]) for s in skills.PARAM_SLICES)) for k, p in zip(kinds, params, strict=True)]
         obs, _, _, _ = b.step(actions)
         np.testing.assert_array_equal(step.observations, obs)
+
+
+def test_stepping_a_finished_episode_needs_a_reset() -> None:
+    from gymnasium.error import ResetNeeded
+
+    env = DribbleEnv(profile="v11", max_actions=3)
+    env.reset(seed=0)
+    done = False
+    while not done:
+        _, _, terminated, truncated, _ = env.step((0, (np.zeros(1), np.zeros(2), np.zeros(2), np.zeros(2))))
+        done = terminated or truncated
+    with pytest.raises(ResetNeeded, match="the episode has ended"):
+        env.step((0, (np.zeros(1), np.zeros(2), np.zeros(2), np.zeros(2))))
+    env.reset()
+    env.step((0, (np.zeros(1), np.zeros(2), np.zeros(2), np.zeros(2))))  # a new episode steps again
+
+
+def test_vec_env_lane_indices_and_seeds_are_checked() -> None:
+    venv = DribbleVecEnv(3, profile="v11")
+    assert venv.get_attr("render_mode", indices=[0, 2, -1]) == [None] * 3
+    with pytest.raises(IndexError, match=r"lane indices \[99\] are out of range for 3 lanes"):
+        venv.get_attr("render_mode", indices=[99])
+    with pytest.raises(IndexError, match="out of range"):
+        venv.env_is_wrapped(object, indices=3)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"seed must be an int or None .*\[1, 2, 3\]"):
+        venv.seed([1, 2, 3])  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="seed must be an int"):
+        venv.seed(True)  # type: ignore[arg-type]
+    assert venv.seed(np.int64(5)) == [5, 6, 7]

@@ -189,7 +189,7 @@ print(sb3_aac.RuntimePolicy is RuntimePolicy)
 
 
 def test_runtime_in_a_numpy_only_venv(tmp_path: Path) -> None:
-    """As the README tells agents: sb3_aac/runtime copied beside an agent, in a fresh venv with numpy alone, acts the same."""
+    """As docs/export-format.md says: sb3_aac/runtime copied beside an agent, in a venv with numpy alone, acts the same."""
     model = randomised_model("RbfPolicy", "nested")
     policy_path = export_policy(model, tmp_path / "agent.aacp")
     obs = observations(model, 200)
@@ -371,7 +371,7 @@ def test_header_is_plain_json(good_file: Path) -> None:
 
 def header_only_file(text: bytes) -> bytes:
     """A file with the magic, a given header and a valid checksum (no arrays)."""
-    from sb3_aac.runtime import MAGIC, PREAMBLE
+    from sb3_aac.runtime.format import MAGIC, PREAMBLE
 
     text += b" " * (-(PREAMBLE.size + len(text)) % 8)
     body = PREAMBLE.pack(MAGIC, len(text)) + text
@@ -392,7 +392,7 @@ def test_a_link_to_an_endless_file_is_refused_at_once(tmp_dir: Path, device: str
 def test_endless_stream_is_read_header_first(tmp_dir: Path) -> None:
     """Through an open stream (as a pipe would give), only the preamble is read before the magic is checked, and a
     lying header length is refused before it is read."""
-    from sb3_aac.runtime import MAGIC, PREAMBLE
+    from sb3_aac.runtime.format import MAGIC, PREAMBLE
 
     class Endless:
         def __init__(self, start: bytes):
@@ -472,7 +472,7 @@ def test_rbf_window_decides_as_dense_evaluation(policy: str, policy_kwargs: dict
     decides as predict."""
     from robocup_dribble import DribbleVecEnv
 
-    from sb3_aac.runtime import BankForward
+    from sb3_aac.runtime.forward import BankForward
 
     model = SarsaAAC(policy, DribbleVecEnv(8, profile="v11"), seed=0, policy_kwargs=policy_kwargs).learn(2000)
     bank = model.policy.approximators
@@ -507,11 +507,15 @@ def test_rbf_window_header_is_checked(good_file: Path, tmp_dir: Path) -> None:
         load_bytes(tmp_dir, rewrite(good_file, bad_window))
 
 
-def test_version_1_files_read_as_dense_rbfs(good_file: Path, tmp_dir: Path) -> None:
+def test_only_version_2_is_read_and_rbf_features_name_their_window(good_file: Path, tmp_dir: Path) -> None:
     def version_1(h):
         h["version"] = 1
+
+    def no_window(h):
         del h["approximators"]["features"]["rbf_window"]
 
-    (tmp_dir / "v1.aacp").write_bytes(rewrite(good_file, version_1))
-    old, new = RuntimePolicy.load(tmp_dir / "v1.aacp"), RuntimePolicy.load(good_file)
-    assert old._bank.window_z2 == np.inf and new._bank.window_z2 == 12.5
+    with pytest.raises(ValueError, match="unknown format version 1; this reader supports version 2"):
+        load_bytes(tmp_dir, rewrite(good_file, version_1))
+    with pytest.raises(ValueError, match=r"lacks or mistypes a required field.*rbf_window"):
+        load_bytes(tmp_dir, rewrite(good_file, no_window))
+    assert RuntimePolicy.load(good_file)._bank.window_z2 == 12.5

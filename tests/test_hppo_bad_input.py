@@ -69,23 +69,35 @@ class PoisonedRewardEnv(ParameterizedTargetEnv):
         return obs, (np.nan if self.count >= self.poison_at else reward), terminated, truncated, info
 
 
-def test_nan_value_loss_stops_with_the_last_finite_weights():
+def test_nan_reward_is_refused_before_learning():
     env = PoisonedRewardEnv(poison_at=40)
     model = HybridPPO("MlpPolicy", env, seed=0, **SMALL)
-    model.learn(32)
-    before = {k: v.clone() for k, v in model.policy.state_dict().items()}
-    with pytest.raises(FloatingPointError, match="HybridPPO diverged: the value loss became non-finite"):
-        model.learn(32, reset_num_timesteps=False)
+    with pytest.raises(ValueError, match=r"non-finite .NaN or inf. rewards of lanes .0. at timestep 40"):
+        model.learn(64)
     assert env.all_finite
+
+
+def collected(**kwargs):
+    """A model with one rollout collected and not yet trained on."""
+    model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(), seed=0, **{**SMALL, **kwargs})
+    model._setup_learn(32, None)
+    model.collect_rollouts(model.env, model._init_callback(None), model.rollout_buffer, 32)
+    return model
+
+
+def test_nan_value_loss_stops_with_the_last_finite_weights():
+    model = collected()
+    before = {k: v.clone() for k, v in model.policy.state_dict().items()}
+    model.rollout_buffer.returns[5] = np.nan
+    with pytest.raises(FloatingPointError, match=r"HybridPPO diverged: the value loss became non-finite.*last finite"):
+        model.train()
     for key, value in model.policy.state_dict().items():
         assert th.equal(value, before[key]) and th.isfinite(value).all(), key  # no step was taken
 
 
 def test_nan_policy_loss_names_the_part():
     """A NaN advantage reaches the policy losses first (the discrete part is checked first)."""
-    model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(), seed=0, normalize_advantage=False, **SMALL)
-    model._setup_learn(32, None)
-    model.collect_rollouts(model.env, model._init_callback(None), model.rollout_buffer, 32)
+    model = collected(normalize_advantage=False)
     model.rollout_buffer.advantages[3] = np.nan
     with pytest.raises(FloatingPointError, match="the discrete policy loss became non-finite"):
         model.train()

@@ -21,9 +21,10 @@ SMALL = dict(n_steps=32, batch_size=32, n_epochs=2, policy_kwargs=dict(net_arch=
 
 class LocalsCheck(BaseCallback):
     def _on_step(self) -> bool:
-        for name in ("new_obs", "rewards", "dones", "infos", "actions", "k", "params"):
+        for name in ("new_obs", "rewards", "dones", "infos", "actions", "k", "params", "packed"):
             assert name in self.locals, name
-        assert self.locals["actions"].shape == (2, 6) and self.locals["params"].shape == (2, 5)
+        assert self.locals["actions"].dtype == object and len(self.locals["infos"]) == 2
+        assert self.locals["packed"].shape == (2, 6) and self.locals["params"].shape == (2, 5)
         return True
 
 
@@ -63,6 +64,9 @@ def test_tensorboard(tmp_path):
         "rollout/ep_len_mean",
         "rollout/type_freq_0",
         "rollout/type_freq_2",
+        "rollout/param_mean_1_1",
+        "rollout/ep_distance_mean",
+        "train/value_mean",
         "train/policy_loss_discrete",
         "train/policy_loss_params",
         "train/clip_fraction_discrete",

@@ -1,8 +1,8 @@
-"""``sb3-aac train --algo pdqn|mpdqn`` (in-process, tiny budgets)."""
+"""``sb3-aac train --algo pdqn|mpdqn``'s own options (in-process, tiny budgets); what every algorithm's training does
+alike is in test_cli.py."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
@@ -12,19 +12,13 @@ from tests.test_cli import run_error
 
 
 @pytest.mark.parametrize("algo", ["pdqn", "mpdqn"])
-def test_train_algo(tmp_path: Path, capsys, algo: str) -> None:
-    assert main(["train", "--algo", algo, "--env", "sb3_aac/ParameterizedTarget-v0", "--timesteps", "300", "--n-envs", "2",
-                 "--eval-episodes", "3", "--out", str(tmp_path), "--set", "learning_starts=100", "--set", "net_arch=[8]",
-                 "--tensorboard", str(tmp_path / "tb")]) == 0  # fmt: skip
-    out = capsys.readouterr().out
-    name = {"pdqn": "PDQN", "mpdqn": "MPDQN"}[algo]
-    assert f"training {name} MlpPolicy" in out and "greedy evaluation over 3 episodes: return" in out
-    assert not (tmp_path / "policy.aacp").exists()  # the .aacp format does not carry P-DQN's networks
-    assert json.loads((tmp_path / "run.json").read_text())["algo"] == algo
-    assert list((tmp_path / "tb").glob(f"{name}_MlpPolicy_1/events.out.tfevents.*"))
+def test_set_reaches_the_algorithm_and_the_policy(tmp_path: Path, algo: str) -> None:
+    assert main(["train", "--algo", algo, "--env", "sb3_aac/ParameterizedTarget-v0", "--timesteps", "200", "--n-envs", "2",
+                 "--eval-episodes", "0", "--out", str(tmp_path),
+                 "--set", "learning_starts=100", "--set", "net_arch=[8]"]) == 0  # fmt: skip
     import sb3_aac
 
-    model = getattr(sb3_aac, name).load(tmp_path / "model.zip")
+    model = getattr(sb3_aac, {"pdqn": "PDQN", "mpdqn": "MPDQN"}[algo]).load(tmp_path / "model.zip")
     assert model.learning_starts == 100 and model.policy.net_arch == [8]
 
 
@@ -40,3 +34,18 @@ def test_errors(capsys, argv: list[str], message: str) -> None:
     import re
 
     assert re.search(message, run_error(capsys, argv))
+
+
+def test_export_of_a_pdqn_model_is_one_line(tmp_path, capsys) -> None:
+    from robocup_dribble import DribbleVecEnv
+    from sb3_aac import MPDQN
+
+    model = MPDQN("MlpPolicy", DribbleVecEnv(2, profile="v19"), seed=0, learning_starts=20)
+    model.learn(40)
+    model.save(tmp_path / "model.zip")
+    with pytest.raises(SystemExit) as info:
+        main(["export", str(tmp_path / "model.zip"), str(tmp_path / "policy.aacp")])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "cannot export" in err and "MPDQN" in err and "Traceback" not in err
+    assert not (tmp_path / "policy.aacp").exists()

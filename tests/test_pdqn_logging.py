@@ -1,4 +1,5 @@
-"""Callbacks and TensorBoard keys of P-DQN / MP-DQN (SB3's test_callbacks / test_tensorboard shapes)."""
+"""P-DQN / MP-DQN's own callback locals and replay-buffer checkpoints; what every algorithm logs alike is in
+test_logging.py."""
 
 import os
 
@@ -8,11 +9,9 @@ from stable_baselines3.common.callbacks import (
     CallbackList,
     CheckpointCallback,
     EvalCallback,
-    StopTrainingOnMaxEpisodes,
     StopTrainingOnRewardThreshold,
 )
 from stable_baselines3.common.env_util import make_vec_env
-from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
 from sb3_aac import MPDQN, PDQN
 from sb3_aac.common.envs import ParameterizedTargetEnv
@@ -44,47 +43,3 @@ def test_callbacks(tmp_path, algo):
     assert os.path.isfile(tmp_path / "m_200_steps.zip") and os.path.isfile(tmp_path / "m_replay_buffer_200_steps.pkl")
     assert os.path.isfile(tmp_path / "best_model.zip") and evaluation.last_mean_reward > 0
     algo.load(tmp_path / "best_model.zip").load_replay_buffer(tmp_path / "m_replay_buffer_200_steps.pkl")
-
-
-def test_stop_training_on_max_episodes():
-    model = PDQN("MlpPolicy", ParameterizedTargetEnv(max_episode_steps=5, loss_threshold=0.0), seed=0, **SMALL)
-    model.learn(10_000, callback=StopTrainingOnMaxEpisodes(max_episodes=3))
-    assert model.num_timesteps == 15  # stopped at the step that ended the third episode
-
-
-@pytest.mark.parametrize("algo", [PDQN, MPDQN])
-def test_tensorboard(tmp_path, algo):
-    name = algo.__name__
-    model = algo("MlpPolicy", ParameterizedTargetEnv(), tensorboard_log=str(tmp_path), seed=0, **SMALL)
-    model.learn(300, log_interval=2)
-    model.learn(300, log_interval=2, reset_num_timesteps=False)
-    assert os.path.isdir(tmp_path / f"{name}_1") and not os.path.isdir(tmp_path / f"{name}_2")
-    events = EventAccumulator(str(tmp_path / f"{name}_1"))
-    events.Reload()
-    tags = set(events.Tags()["scalars"])
-    for tag in (
-        "rollout/ep_rew_mean",
-        "rollout/ep_len_mean",
-        "rollout/ep_distance_mean",
-        "rollout/ep_ball_lost_mean",
-        "rollout/exploration_rate",
-        "train/critic_loss",
-        "train/actor_loss",
-        "train/learning_rate",
-        "train/actor_learning_rate",
-        "time/fps",
-    ):
-        assert tag in tags, tag
-    steps = [event.step for event in events.Scalars("rollout/ep_distance_mean")]
-    assert steps == sorted(steps) and steps[-1] > 300
-    epsilons = [event.value for event in events.Scalars("rollout/exploration_rate")]
-    assert epsilons[0] > epsilons[-1]
-
-
-def test_info_keywords_chosen(tmp_path):
-    model = PDQN("MlpPolicy", ParameterizedTargetEnv(), info_keywords=("distance",), tensorboard_log=str(tmp_path), **SMALL)
-    model.learn(200, log_interval=1, tb_log_name="run")
-    events = EventAccumulator(str(tmp_path / "run_1"))
-    events.Reload()
-    tags = set(events.Tags()["scalars"])
-    assert "rollout/ep_distance_mean" in tags and "rollout/ep_ball_lost_mean" not in tags

@@ -1,4 +1,5 @@
-"""Save/load of P-DQN / MP-DQN models and of their replay buffer; bit-identical reruns (sb3-contrib's shapes)."""
+"""P-DQN / MP-DQN's own save/load (the replay buffer, the number of passes) and bit-identical reruns; the contract
+every algorithm shares is in test_save_load.py."""
 
 import numpy as np
 import pytest
@@ -6,39 +7,21 @@ import torch as th
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_aac import MPDQN, PDQN, SarsaAAC
-from sb3_aac.common.buffers import ParameterizedReplayBuffer
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from tests.helpers import LAYOUTS
-
-SMALL = dict(learning_starts=50, batch_size=16, policy_kwargs=dict(net_arch=[16]))
-
-
-def same_actions(spec, a, b):
-    for x, y in zip(spec.from_env(a), spec.from_env(b), strict=True):
-        np.testing.assert_array_equal(x, y)
+from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer
+from tests.helpers import LAYOUTS, PDQN_SMALL
 
 
 @pytest.mark.parametrize("algo", [PDQN, MPDQN])
 @pytest.mark.parametrize("layout", LAYOUTS)
-def test_save_load(tmp_path, algo, layout):
+def test_save_load_replay_buffer(tmp_path, algo, layout):
     env = make_vec_env(ParameterizedTargetEnv, n_envs=2, env_kwargs=dict(layout=layout))
-    model = algo("MlpPolicy", env, seed=1, **SMALL)
+    model = algo("MlpPolicy", env, seed=1, **PDQN_SMALL)
     model.learn(300)
-    obs = np.random.default_rng(0).uniform(-1, 1, (10, 2)).astype(np.float32)
-    params = model.get_parameters()
-    assert set(params) == {"policy", "policy.q_optimizer", "policy.actor_optimizer"}
-    with pytest.raises(ValueError, match="Key invalid_object is an invalid object name"):
-        model.set_parameters({"invalid_object": {}}, exact_match=False)
-    with pytest.raises(ValueError, match="Names of parameters do not match"):
-        model.set_parameters({}, exact_match=True)
-
-    selected, _ = model.predict(obs, deterministic=True)
+    assert set(model.get_parameters()) == {"policy", "policy.q_optimizer", "policy.actor_optimizer"}
     model.save(tmp_path / "model.zip")
     model.save_replay_buffer(tmp_path / "buffer.pkl")
     loaded = algo.load(tmp_path / "model.zip", env=env)
-    for key, value in loaded.get_parameters()["policy"].items():
-        assert th.equal(value, params["policy"][key]), key
-    same_actions(model.policy.spec, loaded.predict(obs, deterministic=True)[0], selected)
     assert loaded.num_timesteps == 300 and loaded.replay_buffer.size() == 0
 
     loaded.load_replay_buffer(tmp_path / "buffer.pkl")
@@ -50,15 +33,15 @@ def test_save_load(tmp_path, algo, layout):
 
 
 def test_replay_buffer_from_other_spaces_is_rejected(tmp_path):
-    model = PDQN("MlpPolicy", ParameterizedTargetEnv(layout="nested"), seed=0, **SMALL)
+    model = PDQN("MlpPolicy", ParameterizedTargetEnv(layout="nested"), seed=0, **PDQN_SMALL)
     model.learn(60)
     model.save_replay_buffer(tmp_path / "buffer.pkl")
-    other = PDQN("MlpPolicy", ParameterizedTargetEnv(layout="nested", n_types=2), seed=0, **SMALL)
+    other = PDQN("MlpPolicy", ParameterizedTargetEnv(layout="nested", n_types=2), seed=0, **PDQN_SMALL)
     kept = other.replay_buffer
     with pytest.raises(ValueError, match="replay buffer holds transitions of observation space"):
         other.load_replay_buffer(tmp_path / "buffer.pkl")
     assert other.replay_buffer is kept  # nothing half-loaded
-    two_envs = PDQN("MlpPolicy", make_vec_env(ParameterizedTargetEnv, n_envs=2), seed=0, **SMALL)
+    two_envs = PDQN("MlpPolicy", make_vec_env(ParameterizedTargetEnv, n_envs=2), seed=0, **PDQN_SMALL)
     with pytest.raises(ValueError, match="filled by 1 environments, but the model has 2"):
         two_envs.load_replay_buffer(tmp_path / "buffer.pkl")
     from stable_baselines3.common.save_util import save_to_pkl
@@ -83,7 +66,7 @@ def test_load_other_algorithm_is_rejected(tmp_path):
 
 def run(algo, layout, seed, n_envs=2):
     env = make_vec_env(ParameterizedTargetEnv, n_envs=n_envs, env_kwargs=dict(layout=layout))
-    model = algo("MlpPolicy", env, seed=seed, exploration_initial_eps=0.5, **SMALL)
+    model = algo("MlpPolicy", env, seed=seed, exploration_initial_eps=0.5, **PDQN_SMALL)
     model.learn(300)
     env.seed(seed)
     obs, rewards = env.reset(), []

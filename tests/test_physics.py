@@ -1,4 +1,4 @@
-"""The physics against the hand-checked one-cycle test vectors of rcssserver-physics.md §9 (noise off)."""
+"""The physics against the hand-checked one-cycle test vectors of docs/physics.md §9 (noise off)."""
 
 from __future__ import annotations
 

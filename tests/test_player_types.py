@@ -1,4 +1,4 @@
-"""Heterogeneous player types against the spec (§7) and the recorded rcssserver 19.0.0 messages."""
+"""Heterogeneous player types against docs/physics.md §7 and the recorded rcssserver 19.0.0 messages."""
 
 from __future__ import annotations
 
@@ -163,13 +163,13 @@ def test_kick_rand_delta_factor_0_changes_only_kick_rand():
 
 # --- ranges and rules -------------------------------------------------------------------------
 
-V11_RANGES = {  # spec §7.3, v11 column
+V11_RANGES = {  # docs/physics.md §7.3, v11 column
     "player_speed_max": (1.2, 1.2), "player_decay": (0.4, 0.6), "inertia_moment": (5.0, 10.0),
     "dash_power_rate": (0.006, 0.008), "stamina_inc_max": (25.0, 45.0), "player_size": (0.3, 0.3),
     "kickable_margin": (0.7, 0.9), "kick_rand": (0.0, 0.1), "extra_stamina": (0.0, 100.0), "effort_max": (0.8, 1.0),
     "effort_min": (0.4, 0.6), "kick_power_rate": (0.027, 0.027), "catchable_area_l_stretch": (1.0, 1.0),
 }  # fmt: skip
-V19_RANGES = {  # spec §7.3, v13-v19 column
+V19_RANGES = {  # docs/physics.md §7.3, v13-v19 column
     "player_speed_max": (1.05, 1.05), "player_decay": (0.3, 0.5), "inertia_moment": (2.5, 7.5),
     "dash_power_rate": (0.0048, 0.0068), "stamina_inc_max": (40.2, 52.2), "player_size": (0.3, 0.3),
     "kickable_margin": (0.6, 0.8), "kick_rand": (0.0, 0.2), "extra_stamina": (50.0, 100.0), "effort_max": (0.8, 1.0),
@@ -243,7 +243,7 @@ def test_default_type_after_1000_failed_trials(n_sets):
 
 
 def test_a_rejected_trial_draws_nothing_more():
-    """Spec §7.2: a rejection ends the trial at once; the next trial starts again from the first draw."""
+    """docs/physics.md §7.2: a rejection ends the trial at once; the next trial starts again from the first draw."""
     profile = with_player(dataclasses.replace(make_profile("v19", kick_rand=0.0), hetero_acceptance="none"), player_types=2)
     script = [0.5, 0.5, 0.2, 0.5, 0.5, 0.9, 0.25, 0.5]  # trial 1 stops after the kickable margin (kick_rand < 0)
 

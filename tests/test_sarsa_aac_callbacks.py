@@ -1,72 +1,26 @@
+"""SarsaAAC's own callback and logging behaviour (cadence, stopping, dump keys); what every algorithm does alike is
+in test_logging.py."""
+
 import csv
-import os
 from itertools import pairwise
 
-import numpy as np
 import pytest
-import torch as th
 from stable_baselines3.common.callbacks import (
     BaseCallback,
-    CallbackList,
-    CheckpointCallback,
     EvalCallback,
-    EveryNTimesteps,
-    LogEveryNTimesteps,
     StopTrainingOnMaxEpisodes,
     StopTrainingOnNoModelImprovement,
-    StopTrainingOnRewardThreshold,
 )
 from stable_baselines3.common.env_util import make_vec_env
-from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.logger import configure
 
 from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from tests.helpers import POLICIES
 
 
 class Counter(BaseCallback):
     def _on_step(self) -> bool:
         return True
-
-
-class LocalsCheck(BaseCallback):
-    def _on_step(self) -> bool:
-        for name in ("new_obs", "rewards", "dones", "infos", "actions"):
-            assert name in self.locals, name
-        assert self.locals["new_obs"].shape == (self.training_env.num_envs, 2)
-        assert self.locals["actions"].dtype == object
-        return True
-
-
-@pytest.mark.parametrize("policy", POLICIES)
-def test_callbacks(tmp_path, policy):
-    log_folder = tmp_path / "logs"
-    model = SarsaAAC(policy, ParameterizedTargetEnv(), seed=0)
-    checkpoint = CheckpointCallback(save_freq=100, save_path=str(log_folder), name_prefix="sarsa")
-    eval_env = make_vec_env(ParameterizedTargetEnv, n_envs=1, seed=1)
-    # Stop as soon as the mean reward beats -inf: proves the threshold callback ends training.
-    stop_threshold = StopTrainingOnRewardThreshold(reward_threshold=-np.inf, verbose=1)
-    eval_callback = EvalCallback(
-        eval_env, callback_on_new_best=stop_threshold, best_model_save_path=str(log_folder), eval_freq=100, n_eval_episodes=2
-    )
-    event_counter = Counter()
-    event_callback = EveryNTimesteps(n_steps=50, callback=event_counter)
-    log_callback = LogEveryNTimesteps(n_steps=50)
-
-    model.learn(500, callback=CallbackList([checkpoint, eval_callback, event_callback, log_callback, LocalsCheck()]))
-    # Stopped by the reward threshold at the first evaluation (step 100), not at 500.
-    assert model.num_timesteps == 100
-    assert os.path.exists(log_folder / "sarsa_100_steps.zip")
-    assert os.path.exists(log_folder / "best_model.zip")
-    assert event_counter.n_calls == 2  # at 50 and 100
-    # The evaluation runs after env.step and before that step's update, and stopping skips the update,
-    # so the saved best model is exactly the final one and evaluates to the same mean reward.
-    best = SarsaAAC.load(log_folder / "best_model.zip")
-    for key, value in best.get_parameters()["policy"].items():
-        assert th.equal(value, model.get_parameters()["policy"][key]), key
-    eval_env.seed(1)
-    assert evaluate_policy(best, eval_env, n_eval_episodes=2)[0] == pytest.approx(eval_callback.last_mean_reward)
 
 
 def test_no_model_improvement_and_max_episodes():
@@ -79,7 +33,7 @@ def test_no_model_improvement_and_max_episodes():
     model = SarsaAAC("RbfPolicy", make_vec_env(ParameterizedTargetEnv, n_envs=2, seed=0), seed=0)
     model.learn(100_000, callback=StopTrainingOnMaxEpisodes(max_episodes=5))
     assert model.num_timesteps < 100_000
-    assert model._episode_num >= 5
+    assert model.episode_num >= 5
 
 
 def test_function_callback_and_n_calls():
@@ -137,13 +91,6 @@ def test_dump_logs_keys(tmp_path):
     assert 0.0 <= float(first["rollout/ep_ball_lost_mean"]) <= 1.0
 
 
-def test_log_interval_none_never_dumps(tmp_path):
-    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
-    model.set_logger(configure(str(tmp_path), ["csv"]))
-    model.learn(300, log_interval=None)
-    assert (tmp_path / "progress.csv").read_text() == ""
-
-
 def test_stopping_keeps_the_latest_observation():
     """A callback that stops training skips that step's update; the next learn() continues from new_obs."""
     seen = {}
@@ -162,18 +109,21 @@ def test_stopping_keeps_the_latest_observation():
 
 @pytest.mark.parametrize(("log_min_timesteps", "n_envs"), [(0, 1), (0, 16), (500, 16), (2000, 1)])
 def test_logs_are_dumped_by_episodes_and_timesteps(tmp_path, log_min_timesteps: int, n_envs: int):
-    """A dump needs log_interval more episodes and log_min_timesteps more env steps than the previous one."""
+    """The first dump comes after log_interval episodes; each later one needs log_interval more episodes and
+    log_min_timesteps more env steps than the previous one; learn ends with a dump."""
     env = make_vec_env(ParameterizedTargetEnv, n_envs=n_envs, seed=0)
     model = SarsaAAC("RbfPolicy", env, seed=0, log_min_timesteps=log_min_timesteps)
     model.set_logger(configure(str(tmp_path), ["csv"]))
     model.learn(4000, log_interval=3)
     rows = list(csv.DictReader((tmp_path / "progress.csv").open()))
-    steps = [0] + [int(row["time/total_timesteps"]) for row in rows]
-    episodes = [0] + [int(row["time/episodes"]) for row in rows]
-    assert len(rows) >= 1
-    assert all(b - a >= max(log_min_timesteps, 1) for a, b in pairwise(steps))
-    assert all(b - a >= 3 for a, b in pairwise(episodes))
+    steps = [int(row["time/total_timesteps"]) for row in rows]
+    episodes = [int(row["time/episodes"]) for row in rows]
+    assert len(rows) >= 2 and episodes[0] >= 3 and steps[-1] == model.num_timesteps
+    spaced = list(pairwise(steps[:-1]))  # the last dump is the end of learn's
+    assert all(b - a >= max(log_min_timesteps, 1) for a, b in spaced)
+    assert all(b - a >= 3 for a, b in pairwise(episodes[:-1]))
     if log_min_timesteps:
-        assert len(rows) <= 4000 // log_min_timesteps
+        assert steps[0] < log_min_timesteps  # the first dump does not wait for the spacing
+        assert len(rows) <= 4000 // log_min_timesteps + 2
     else:  # SB3's cadence: at the first step at which 3 more episodes have ended
         assert len(rows) >= 20

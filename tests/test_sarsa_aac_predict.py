@@ -39,14 +39,6 @@ def test_predict_in_vec_env():
         obs, _, _, _ = env.step(actions)
 
 
-def test_predict_bad_shape():
-    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
-    with pytest.raises(ValueError, match=r"Unexpected observation shape \(3,\)"):
-        model.predict(np.zeros(3))
-    with pytest.raises(ValueError, match=r"Unexpected observation shape \(4, 3\)"):
-        model.predict(np.zeros((4, 3)))
-
-
 def test_policy_predict_matches_model_predict_and_device():
     model = SarsaAAC("RbfMlpPolicy", ParameterizedTargetEnv(), seed=0, device="cpu")
     assert model.device.type == "cpu" and model.policy.device.type == "cpu"

@@ -152,7 +152,7 @@ def test_return_scale_survives_save_load(tmp_path):
     model.learn(500)
     model.save(tmp_path / "model.zip")
     loaded = SarsaAAC.load(tmp_path / "model.zip", env=scaled_reward_env(50.0, n_envs=2))
-    assert loaded.return_scale == model.return_scale > 0 and loaded._value_units_set
+    assert loaded.return_scale == model.return_scale > 0
     before = loaded.policy.approximators.weight2.clone()
     loaded.learn(2, reset_num_timesteps=False)  # one step: a small change, not a rescale by return_scale
     assert (loaded.policy.approximators.weight2 - before).abs().max() < 0.5 * before.abs().max()

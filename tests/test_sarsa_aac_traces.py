@@ -11,7 +11,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from sb3_aac.common.tile_coding import TileBank, TileTraces
+from sb3_aac.sarsa_aac.tile_coding import TileBank, TileTraces
 from tests.helpers import OneStepEnv
 
 

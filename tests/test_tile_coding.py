@@ -8,7 +8,7 @@ from gymnasium import spaces
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_aac import SarsaAAC
-from sb3_aac.common.tile_coding import TileBank, default_tile_groups, tile_layout
+from sb3_aac.sarsa_aac.tile_coding import TileBank, default_tile_groups, tile_layout
 
 
 def test_layout_and_active_features():
@@ -94,7 +94,7 @@ def test_save_load_keeps_the_grid(tmp_path):
 
 def test_compiled_training_pass_equals_the_runtime_forward_pass():
     """Training's numba loops give the very tiles and outputs of runtime.TileForward (numpy), on 5,000 observations."""
-    from sb3_aac.runtime import TileForward
+    from sb3_aac.runtime.forward import TileForward
 
     bank = TileBank(np.array([-1.0, 0.0, -5.0]), np.array([1.0, 2.0, 5.0]), 4)
     with th.no_grad():

@@ -170,8 +170,8 @@ def test_bad_storage_is_one_line_and_left_alone(
     ("argv", "message"),
     [
         (["--trials", "0"], "--trials: must be positive"),
-        (["--timesteps", "-5"], "--timesteps: must be positive"),
-        (["--eval-episodes", "0"], "--eval-episodes: must be positive"),
+        (["--timesteps", "-5"], "--timesteps: must be in 1 .."),
+        (["--eval-episodes", "0"], "--eval-episodes: must be in 1 .."),
         (["--policy", "TabularPolicy"], "invalid choice: 'TabularPolicy'"),
         (["--set", "gamma=3"], "gamma must be in [0, 1], got 3"),
         (["--set", "colour=1"], "unknown --set key 'colour'"),

@@ -199,7 +199,7 @@ def _kick_params(s, vx, vy, p) -> None:
 
 @njit(cache=True)
 def _kick_reach(s, t, k) -> float:
-    """The largest change of ball velocity a kick can make in this state (spec §3), 0 if the ball is not kickable."""
+    """The largest ball-velocity change a kick can make in this state (docs/physics.md §3), 0 if the ball is not kickable."""
     rx, ry = s[physics.B_X] - s[physics.P_X], s[physics.B_Y] - s[physics.P_Y]
     distance = math.hypot(rx, ry)
     if distance > physics.kickable_radius(t[physics.T_SIZE], k[physics.K_BALL_SIZE], t[physics.T_KICKABLE_MARGIN]):
@@ -212,7 +212,7 @@ def _kick_reach(s, t, k) -> float:
 
 @njit(cache=True)
 def _dash_accel(s, t, k, effort) -> tuple[float, float]:
-    """The acceleration of a full-power dash along the body with ``effort`` and enough stamina (spec §2.3)."""
+    """The acceleration of a full-power dash along the body with ``effort`` and enough stamina (docs/physics.md §2.3)."""
     accel = min(effort * k[physics.K_MAX_DASH_POWER] * t[physics.T_DASH_POWER_RATE], k[physics.K_PLAYER_ACCEL_MAX])
     return accel * math.cos(s[physics.P_BODY]), accel * math.sin(s[physics.P_BODY])
 
@@ -222,7 +222,7 @@ def _player_path(s, t, k, n, effort, path) -> None:
     """The player's positions and velocities over a kick cycle (it coasts) then ``n`` full-power dashes along its
     body with ``effort``, without a ball: ``path[m]`` = (x, y, vx, vy) after ``m`` cycles, ``m`` = 0 .. n + 1.
 
-    Spec §2.3 and §5.1 without noise, with the stamina of the rebuilt state (full, so a dash gets its full power and
+    docs/physics.md §2.3 and §5.1 without noise, with the stamina of the rebuilt state (full, so a dash gets its full power and
     v19's two legs push equally); ``tests/test_dribbler.py`` checks it against :func:`physics.step_lane`.
     """
     ax, ay = _dash_accel(s, t, k, effort)
@@ -243,7 +243,7 @@ def _player_path(s, t, k, n, effort, path) -> None:
 @njit(cache=True)
 def _run(s, t, k, n) -> None:
     """Advance ``s`` by ``n`` full-power dashes along the body while the ball rolls freely (no collision, no kick):
-    :func:`_player_path`'s dashes, plus the ball (spec §5.1: ``p += v``, ``v *= ball_decay``)."""
+    :func:`_player_path`'s dashes, plus the ball (docs/physics.md §5.1: ``p += v``, ``v *= ball_decay``)."""
     ax, ay = _dash_accel(s, t, k, s[physics.S_EFFORT])
     speed_max, decay, ball_decay = t[physics.T_SPEED_MAX], t[physics.T_DECAY], k[physics.K_BALL_DECAY]
     for _ in range(n):

@@ -109,8 +109,8 @@ class DribbleEnv(gym.Env):
 
     ``info``: ``distance`` (metres dribbled along +x, frozen at the last step with the ball), ``ball_lost``,
     and ``player_type`` (a :class:`robocup_dribble.player_types.PlayerType` with the type's parameters).
-    :meth:`step` before the first :meth:`reset` raises Gymnasium's ``ResetNeeded``; an invalid action raises
-    ``ValueError`` and changes nothing.
+    :meth:`step` before the first :meth:`reset`, or after the episode ended, raises Gymnasium's ``ResetNeeded``; an
+    invalid action raises ``ValueError`` and changes nothing.
 
     ## Arguments
 
@@ -140,6 +140,7 @@ class DribbleEnv(gym.Env):
             self._lanes.reseed(self.np_random)
         obs = self._lanes.reset(self._lane)
         self._player_type = self._lanes.player_type(0)
+        self._episode_over = False
         self._ball_trail.clear()
         self._player_trail.clear()
         self._remember_positions()
@@ -150,14 +151,17 @@ class DribbleEnv(gym.Env):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._player_type is None:
             raise ResetNeeded("Call reset() before step(): the episode has not started")
+        if self._episode_over:
+            raise ResetNeeded("Call reset() before step(): the episode has ended (terminated or truncated)")
         action_type, params = parse_action(action)
         out = self._lanes.step(np.array([action_type], dtype=np.int64), params[None, :], autoreset=False)
         self._remember_positions()
         if self.render_mode == "human":
             self.render()
-        lost = bool(out.terminated[0])
+        lost, truncated = bool(out.terminated[0]), bool(out.truncated[0])
+        self._episode_over = lost or truncated
         info = self._info(float(out.distances[0]), lost)
-        return out.observations[0], float(out.rewards[0]), lost, bool(out.truncated[0]), info
+        return out.observations[0], float(out.rewards[0]), lost, truncated, info
 
     def render(self) -> np.ndarray | None:
         if self._player_type is None:

@@ -2,7 +2,7 @@
 
 Names follow the server's own ``server.conf`` / ``player.conf`` keys (``server::ball_decay`` becomes
 ``ServerParams.ball_decay``), so a value can be checked against a running server's ``(server_param ...)``
-message. Values and version history: ``../shared/ref/rcssserver-physics.md`` §0 and §7.3, read from
+message. Values and version history: ``docs/physics.md`` §0 and §7.3, read from
 rcssserver's ``src/serverparam.cpp`` and ``src/playerparam.cpp``.
 
 Two profiles ship:
@@ -82,7 +82,7 @@ class ServerParams:
 
 @dataclass(frozen=True)
 class PlayerParams:
-    """``player::`` parameters: how heterogeneous player types are drawn (spec §7.2, §7.3)."""
+    """``player::`` parameters: how heterogeneous player types are drawn (docs/physics.md §7.2, §7.3)."""
 
     player_types: int = 18
     player_speed_max_delta_min: float = 0.0
@@ -118,8 +118,8 @@ class ServerProfile:
     :param name: short name (``"v19"``, ``"v11"``).
     :param server: the ``server::`` parameters.
     :param player: the ``player::`` parameters (heterogeneous types).
-    :param dash_model: ``"bipedal"`` (v19: two legs, body rotation when stamina runs short, spec §2.4)
-        or ``"single"`` (v18 and earlier: one acceleration, spec §2.3).
+    :param dash_model: ``"bipedal"`` (v19: two legs, body rotation when stamina runs short, docs/physics.md §2.4)
+        or ``"single"`` (v18 and earlier: one acceleration, docs/physics.md §2.3).
     :param dash_direction: whether ``(dash P D)`` takes a direction (v13+). Without it D is ignored.
     :param noise_shape: ``"polar"`` (v12+: radius uniform in [0, r], angle uniform) or ``"box"``
         (v11 and earlier: each axis uniform in [-r, r]); applies to movement and kick noise.

@@ -7,15 +7,16 @@ array; every layout is a tuple of field names (``*_FIELDS``) and the column cons
 :func:`step` advances all lanes by one server cycle in a single compiled (numba) call; compiled code calls
 :func:`cycle`, one lane's cycle on scalars read from and written back to the 2-D arrays (no row views), directly.
 
-Formulas and their order follow the rcssserver source as restated in ``../shared/ref/rcssserver-physics.md``
-(cited below as "spec §n"); the numbers were checked against recordings of a real rcssserver 19.0.0
-(shipped in ``robocup_dribble/data/golden``, replayed by ``python -m robocup_dribble.validate``). One server cycle (spec §1):
+Formulas and their order follow the rcssserver source as restated in ``docs/physics.md`` (cited below by section,
+"docs/physics.md §n"); the numbers were checked against recordings of a real rcssserver 19.0.0 (shipped in
+``robocup_dribble/data/golden``, replayed by ``python -m robocup_dribble.validate``). One server cycle
+(docs/physics.md §1):
 
-1. the command: a kick accelerates the ball at command time (spec §3), a turn sets the body (spec §4),
-   a dash accelerates the player (spec §2; v19's two legs, spec §2.4, or the single-leg model, spec §2.3);
-2. movement of ball and player: acceleration cap, speed cap, noise, ``p += v``, ``v *= decay`` (spec §5);
-3. ball-player collision on the new positions: midpoint push-out, velocities times -0.1 (spec §6.1);
-4. stamina, effort and recovery update (spec §2.5).
+1. the command: a kick accelerates the ball at command time (docs/physics.md §3), a turn sets the body (§4), a dash
+   accelerates the player (§2; v19's two legs, §2.4, or the single-leg model, §2.3);
+2. movement of ball and player: acceleration cap, speed cap, noise, ``p += v``, ``v *= decay`` (docs/physics.md §5);
+3. ball-player collision on the new positions: midpoint push-out, velocities times -0.1 (docs/physics.md §6.1);
+4. stamina, effort and recovery update (docs/physics.md §2.5).
 
 Randomness enters only through ``uniforms``, an ``(N, N_UNIFORMS)`` array of U[0, 1) draws the caller makes from
 its own generator; each has a fixed role (``U_*``). Vector lengths are ``sqrt(x*x + y*y)`` as in the server's
@@ -179,7 +180,7 @@ def new_state(n_lanes: int) -> np.ndarray:
 
 
 def recover(state: np.ndarray, types: np.ndarray, profile: ServerProfile, lanes: np.ndarray | slice = slice(None)) -> None:
-    """The server's ``(recover)`` for ``lanes`` (indices or a slice; spec §2.5): see :func:`recover_lane`."""
+    """The server's ``(recover)`` for ``lanes`` (indices or a slice; docs/physics.md §2.5): see :func:`recover_lane`."""
     check_array("state", state, (None, STATE_SIZE))
     types = input_array("types", types, (state.shape[0], TYPE_SIZE))
     _recover_lanes(state, types, np.arange(state.shape[0])[lanes], profile_constants(profile))
@@ -275,7 +276,7 @@ kickable_radius = njit(cache=True, error_model="numpy", inline="always")(params.
 
 @njit(cache=True, error_model="numpy", inline="always")
 def kick_rate(kick_power_rate: float, dir_diff: float, dist_ball: float, kickable_margin: float) -> float:
-    """Ball acceleration per unit of kick power (spec §3.2): smaller for a ball farther away or off the body axis.
+    """Ball acceleration per unit of kick power (docs/physics.md §3.4): smaller for a ball farther away or off the body axis.
 
     :param dir_diff: |angle of the ball relative to the body| (rad). :param dist_ball: gap between the surfaces (m).
     """
@@ -284,7 +285,7 @@ def kick_rate(kick_power_rate: float, dir_diff: float, dist_ball: float, kickabl
 
 @njit(cache=True, error_model="numpy")
 def _noise(r_max: float, u_r: float, u_a: float, box: bool) -> tuple[float, float]:
-    """Movement/kick noise of size ``r_max``: polar (v12+, radius uniform) or box (v11), spec §5.2 and §3.5."""
+    """Movement/kick noise of size ``r_max``: polar (v12+, radius uniform) or box (v11), docs/physics.md §5.2 and §3.5."""
     if box:
         return _drand(-r_max, r_max, u_r), _drand(-r_max, r_max, u_a)
     radius = _drand(0.0, r_max, u_r)
@@ -296,7 +297,7 @@ def _noise(r_max: float, u_r: float, u_a: float, box: bool) -> tuple[float, floa
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _leg_accel(power: float, direction: float, body: float, effort: float, dash_power_rate: float, k: np.ndarray):
-    """Acceleration of a dash (or of one leg) with effective power ``power`` (spec §2.3; direction rate spec §2.2)."""
+    """Acceleration of a dash (or of one leg) with effective power ``power`` (docs/physics.md §2.3; direction rate §2.2)."""
     rate = 1.0
     if k[K_DASH_DIRECTION] > 0.5:
         d = abs(direction)
@@ -311,7 +312,7 @@ def _leg_accel(power: float, direction: float, body: float, effort: float, dash_
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _dash(power, direction, body, pvx, pvy, stamina, effort, dash_power_rate, player_size, extra_stamina, u_turn, k):
-    """A dash: returns the player's acceleration (x, y), its body and its stamina after the dash (spec §2.3, §2.4)."""
+    """A dash: the player's acceleration (x, y), its body and its stamina after the dash (docs/physics.md §2.3, §2.4)."""
     power = min(max(power, k[K_MIN_DASH_POWER]), k[K_MAX_DASH_POWER])
     if k[K_DASH_DIRECTION] > 0.5:
         direction = min(max(direction, k[K_MIN_DASH_ANGLE]), k[K_MAX_DASH_ANGLE])
@@ -322,14 +323,14 @@ def _dash(power, direction, body, pvx, pvy, stamina, effort, dash_power_rate, pl
         direction = 0.0
     available = stamina + extra_stamina
 
-    if k[K_BIPEDAL] < 0.5:  # one leg (v18 and earlier, spec §2.3)
+    if k[K_BIPEDAL] < 0.5:  # one leg (v18 and earlier, docs/physics.md §2.3)
         cost = power if power >= 0.0 else -2.0 * power
         cost = min(cost, available)
         effective = cost if power >= 0.0 else -0.5 * cost
         ax, ay = _leg_accel(effective, direction, body, effort, dash_power_rate, k)
         return ax, ay, body, max(0.0, stamina - cost)
 
-    # v19: both legs get (power, direction); the cost split quirk rotates the body when stamina is short (spec §2.4)
+    # v19: both legs get (power, direction); the cost split quirk rotates the body when stamina is short (docs/physics.md §2.4)
     leg_cost = 0.5 * power if power >= 0.0 else -power
     total = 2.0 * leg_cost
     if total < 1e-5:
@@ -354,7 +355,7 @@ def _dash(power, direction, body, pvx, pvy, stamina, effort, dash_power_rate, pl
 
 @njit(cache=True, error_model="numpy")
 def _move(x, y, vx, vy, ax, ay, accel_max, speed_max, rand, decay, u_r, u_a, box):
-    """``MPObject::_inc`` (spec §5.1): returns the new position and the velocity after decay."""
+    """``MPObject::_inc`` (docs/physics.md §5.1): returns the new position and the velocity after decay."""
     if ax != 0.0 or ay != 0.0:  # both caps are skipped when there is no acceleration
         a = norm(ax, ay)
         if a > accel_max:
@@ -370,7 +371,7 @@ def _move(x, y, vx, vy, ax, ay, accel_max, speed_max, rand, decay, u_r, u_a, box
 
 @njit(cache=True, error_model="numpy")
 def _collide(px, py, bx, by, reach, u):
-    """Resolve a ball-player overlap by the midpoint push-out (spec §6.1): returns (collided, px, py, bx, by)."""
+    """Resolve a ball-player overlap by the midpoint push-out (docs/physics.md §6.1): returns (collided, px, py, bx, by)."""
     collided = False
     for _ in range(10):
         dx, dy = bx - px, by - py
@@ -397,7 +398,7 @@ def _collide(px, py, bx, by, reach, u):
 @njit(cache=True, error_model="numpy", inline="always")
 def recover_lane(state: np.ndarray, i: int, types: np.ndarray, ti: int, k: np.ndarray) -> None:
     """The server's ``(recover)`` of lane ``i`` (type row ``ti``): full stamina and capacity, recovery at its initial
-    value, effort at the type's maximum (spec §2.5)."""
+    value, effort at the type's maximum (docs/physics.md §2.5)."""
     state[i, S_STAMINA] = k[K_STAMINA_MAX]
     state[i, S_RECOVERY] = k[K_RECOVER_INIT]
     state[i, S_EFFORT] = types[ti, T_EFFORT_MAX]
@@ -426,7 +427,7 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
     kick_ok = False
 
     # 1. the command
-    if kind == CMD_KICK:  # spec §3: the ball accelerates at command time
+    if kind == CMD_KICK:  # docs/physics.md §3: the ball accelerates at command time
         power = min(max(power, k[K_MIN_POWER]), k[K_MAX_POWER])
         kick_direction = math.radians(min(max(direction, k[K_MIN_MOMENT]), k[K_MAX_MOMENT]))
         rx, ry = bx - px, by - py
@@ -447,7 +448,7 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
                 max_rand = types[ti, T_KICK_RAND] * (power / k[K_MAX_POWER]) * (pos_rate + speed_rate)
             nx, ny = _noise(max_rand, uniforms[ui, U_KICK_R], uniforms[ui, U_KICK_A], box)
             ball_ax, ball_ay = ball_ax + nx, ball_ay + ny
-    elif kind == CMD_TURN:  # spec §4: the moment over (1 + inertia * speed), with noise
+    elif kind == CMD_TURN:  # docs/physics.md §4: the moment over (1 + inertia * speed), with noise
         moment = math.radians(min(max(power, k[K_MIN_MOMENT]), k[K_MAX_MOMENT]))
         rand = k[K_PLAYER_RAND]
         turned = (1.0 + _drand(-rand, rand, uniforms[ui, U_TURN])) * moment / (1.0 + types[ti, T_INERTIA] * norm(pvx, pvy))
@@ -468,7 +469,7 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
             k,
         )
 
-    # 2. movement (spec §5)
+    # 2. movement (docs/physics.md §5)
     bx, by, bvx, bvy = _move(
         bx,
         by,
@@ -500,12 +501,12 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
         box,
     )
 
-    # 3. collision (spec §6.1): push apart, both velocities times -0.1
+    # 3. collision (docs/physics.md §6.1): push apart, both velocities times -0.1
     collided, px, py, bx, by = _collide(px, py, bx, by, ball_size + player_size, uniforms[ui, U_COLLIDE])
     if collided:
         bvx, bvy, pvx, pvy = -0.1 * bvx, -0.1 * bvy, -0.1 * pvx, -0.1 * pvy
 
-    # 4. Player::updateStamina (spec §2.5): recovery and effort decay, effort rise, stamina recovery and capacity
+    # 4. Player::updateStamina (docs/physics.md §2.5): recovery and effort decay, effort rise, stamina recovery and capacity
     stamina_max = k[K_STAMINA_MAX]
     if stamina <= k[K_RECOVER_DEC_THR] * stamina_max:
         recovery = max(k[K_RECOVER_MIN], recovery - k[K_RECOVER_DEC])

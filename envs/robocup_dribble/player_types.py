@@ -1,6 +1,6 @@
 """Heterogeneous player types, drawn the way rcssserver draws them.
 
-Reference: ``../shared/ref/rcssserver-physics.md`` §7 (read from rcssserver's ``src/heteroplayer.cpp``):
+Reference: ``docs/physics.md`` §7 (read from rcssserver's ``src/heteroplayer.cpp``):
 §7.1 the default type 0 (:func:`default_player_type`); §7.2 the generation of types 1 .. player_types-1
 (:func:`draw_type_table`, the one implementation, vectorised over independent type sets); §7.3 the ranges of
 each era (``player::`` parameters in :mod:`robocup_dribble.params`); §7.4 the random source of rcssserver 19
@@ -53,7 +53,7 @@ class PlayerType(NamedTuple):
 
     @property
     def terminal_speed(self) -> float:
-        """Speed reached by full dashes at effort_max, before the speed cap (spec §2.3, §7.2 step 9)."""
+        """Speed reached by full dashes at effort_max, before the speed cap (docs/physics.md §2.3, §7.2 step 9)."""
         return 100.0 * self.dash_power_rate * self.effort_max / (1.0 - self.player_decay)
 
     @classmethod
@@ -71,7 +71,7 @@ _SPEED_MAX, _DECAY, _DASH_POWER_RATE, _EFFORT_MAX = (
 
 
 def default_player_type(profile: str | ServerProfile = "v19") -> PlayerType:
-    """Type 0: the ``server::`` values (spec §7.1); the catchable-area stretch is 1."""
+    """Type 0: the ``server::`` values (docs/physics.md §7.1); the catchable-area stretch is 1."""
     s = make_profile(profile).server
     return PlayerType(s.player_speed_max, s.stamina_inc_max, s.player_decay, s.inertia_moment, s.dash_power_rate,
                       s.player_size, s.kickable_margin, s.kick_rand, s.extra_stamina, s.effort_init,  # effort_max
@@ -84,7 +84,7 @@ def stack_player_types(types: Sequence[PlayerType]) -> np.ndarray:
 
 
 class ServerRandom:
-    """The random source of rcssserver 19's ``HeteroPlayer::delta`` (spec §7.4), a ``uniform(lo, hi, n)`` callable.
+    """The random source of rcssserver 19's ``HeteroPlayer::delta`` (docs/physics.md §7.4), a ``uniform(lo, hi, n)`` callable.
 
     ``std::mt19937`` seeded with ``player::random_seed``; each uniform value takes two 32-bit outputs x1 then x2,
     ``u = (x1 + x2 * 2**32) / 2**64`` (clamped below 1, as libstdc++'s ``generate_canonical``) and returns
@@ -137,7 +137,7 @@ class ServerRandom:
 
 
 def _steps(profile: ServerProfile) -> list[Any]:
-    """Spec §7.2 steps 1-8 in the server's order: ``((delta min, delta max), [(column, a, b, rule), ...])``.
+    """docs/physics.md §7.2 steps 1-8 in the server's order: ``((delta min, delta max), [(column, a, b, rule), ...])``.
 
     Each step draws one delta d and computes the values ``a + d * b``; ``column`` is the TYPE_FIELDS column the
     value sets (None: the value is only checked, a later step sets that column) and ``rule`` rejects the trial
@@ -174,7 +174,7 @@ def _steps(profile: ServerProfile) -> list[Any]:
 
 
 class TypeRecipe(NamedTuple):
-    """Spec §7.2 as arrays for the compiled generator (:func:`type_recipe`; numba takes arrays, not lists).
+    """docs/physics.md §7.2 as arrays for the compiled generator (:func:`type_recipe`; numba takes arrays, not lists).
 
     Step ``i`` draws ``delta[i] = step_lo[i] + step_span[i] * u`` (no draw when ``step_span[i] == 0``), then checks
     ``check_a[j] + delta[i] * check_b[j]`` for ``j`` in ``check_start[i] .. check_start[i + 1]``: the trial is rejected
@@ -197,7 +197,7 @@ class TypeRecipe(NamedTuple):
 
 
 def _passes(value: float, strict: bool) -> bool:
-    """The rejection rule of spec §7.2: a value must be > 0 (strict) or >= 0."""
+    """The rejection rule of docs/physics.md §7.2: a value must be > 0 (strict) or >= 0."""
     return value > 0.0 if strict else value >= 0.0
 
 
@@ -249,7 +249,7 @@ def next_uniform(buffer: np.ndarray, position: np.ndarray) -> float:
 
 @njit(cache=True, error_model="numpy")
 def draw_type_set(recipe: TypeRecipe, buffer: np.ndarray, position: np.ndarray, out: np.ndarray, row: int) -> None:
-    """Draw one set of player types into ``out[row]`` (``(player_types, F)``), the server's way (spec §7.2).
+    """Draw one set of player types into ``out[row]`` (``(player_types, F)``), the server's way (docs/physics.md §7.2).
 
     Type 0 is the default type; types 1.. are drawn one after the other, each by up to ``MAX_TRIALS`` trials (a type
     whose trials all fail stays the default type). The uniforms come from :func:`next_uniform` in the server's
@@ -344,7 +344,7 @@ def draw_type_table(profile: str | ServerProfile, n_sets: int, uniform: Uniform)
 def generate_player_types(
     profile: str | ServerProfile = "v19", seed: int = 1, kick_rand_delta_factor: float | None = None
 ) -> list[PlayerType]:
-    """The types a server generates with ``player::random_seed = seed`` (list index = type id); exact for v19 (§7.4).
+    """The types a server makes with ``player::random_seed = seed`` (index = type id), exact for v19 (docs/physics.md §7.4).
 
     ``kick_rand_delta_factor`` overrides ``profile.player.kick_rand_delta_factor`` (the golden recordings use 0 with
     server kick_rand 0, i.e. ``make_profile("v19", kick_rand=0)``); they were made with the default seed 1.

@@ -2,7 +2,7 @@
 
 Independent of the physics: the env fills a :class:`RenderFrame` and :class:`DribbleRenderer` draws it with
 pygame (imported lazily; install it with ``pip install "sb3-aac[render]"``).  Conventions are the server's
-monitor (``../shared/ref/rcssserver-physics.md`` §8): x to the right, +y *down* the screen, and a positive body
+monitor (``docs/physics.md`` §8): x to the right, +y *down* the screen, and a positive body
 angle turns clockwise on screen.  The camera follows the player horizontally.
 """
 
@@ -17,7 +17,7 @@ from gymnasium.error import DependencyNotInstalled
 
 RENDER_MODES = ("human", "rgb_array")
 
-# Pitch geometry in metres (spec §8).
+# Pitch geometry in metres (docs/physics.md §8).
 HALF_LENGTH, HALF_WIDTH = 52.5, 34.0
 CENTRE_CIRCLE_R = 9.15
 PENALTY_LENGTH, PENALTY_HALF_WIDTH = 16.5, 40.32 / 2

@@ -2,7 +2,7 @@
 
 Uc-Cetina (2013) names the action types (Dash Max, Kick Velocity, Kick Position, Kick Align) and says they take
 7 parameters in all, at most 2 each; the parameter meanings were lost with the paper's figures. Ours (chosen by us,
-documented here and in the README):
+documented here and in docs/robocup_dribble.md):
 
 ====================  =========================  ===================================================================
 action type           parameters (units, range)  server command this cycle
@@ -25,7 +25,7 @@ action type           parameters (units, range)  server command this cycle
 ====================  =========================  ===================================================================
 
 Every kick aims at a target ball velocity; when the ball cannot reach it with maximum power (the kick's effective
-power shrinks with the ball's distance and angle, spec §3), the kick goes at maximum power in the direction of the
+power shrinks with the ball's distance and angle, docs/physics.md §3), the kick goes at maximum power in the direction of the
 needed change, which is the reachable velocity closest to the target. Parameters outside their ranges are clipped
 to them, as the server clips the power and direction of a command. The action space of one lane is
 ``Tuple(Discrete(4), Tuple(Box(1), Box(2), Box(2), Box(2)))``; a batch of actions is an ``(N,)`` int array of types

@@ -11,9 +11,9 @@ mix of kicks and dashes costs about the same per step). Each figure is items per
 everything here runs on one thread), the best of three runs of about ``--seconds`` / 3 each; the ratios compare
 runs made seconds apart in the same process.
 
-Targets (one core): a single-env step <= 30 us (issue 2); ``DribbleVecEnv(4096).step_arrays`` (the array path)
+Targets (one core): a single-env step <= 30 us; ``DribbleVecEnv(4096).step_arrays`` (the array path)
 >= 3,000,000 player-steps/s with holding actions and >= 1,500,000 with random actions, and SB3's tuple ``step`` at
-N = 64 within 3x of ``step_arrays`` at N = 64 (issue 12). The load average is printed: on a shared machine the
+N = 64 within 3x of ``step_arrays`` at N = 64. The load average is printed: on a shared machine the
 absolute figures still drop with it (caches are shared), the ratios much less.
 """
 
@@ -31,7 +31,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from robocup_dribble import DribbleEnv, DribbleVecEnv, skills
 
 ACTIONS = 4096  # distinct pre-drawn actions, cycled
-TARGETS = {"random": 1_500_000, "holding": 3_000_000}  # DribbleVecEnv(4096).step_arrays, player-steps/s (issue 12)
+TARGETS = {"random": 1_500_000, "holding": 3_000_000}  # DribbleVecEnv(4096).step_arrays, player-steps/s
 
 
 def random_actions(profile: str, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:

@@ -114,7 +114,7 @@ TASK_FIELDS = tuple(field.name for field in dataclasses.fields(DribbleTask))
 def observation_space(profile: ServerProfile, task: DribbleTask) -> spaces.Box:
     """The 10-variable Box with bounds every observation under ``profile`` respects.
 
-    Type parameters span the profile's heterogeneous ranges (spec §7.3). Velocities are bounded by the speed caps
+    Type parameters span the profile's heterogeneous ranges (docs/physics.md §7.3). Velocities are bounded by the speed caps
     plus the largest movement noise, after decay. The relative ball position of a non-terminal step lies inside the
     largest kickable area; the bound adds 0.25 m, and a terminal observation (ball lost) is clipped to it.
     """

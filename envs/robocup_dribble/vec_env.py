@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import gc
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, NamedTuple
 
 import gymnasium as gym
@@ -179,6 +179,24 @@ class DribbleVecEnv(VecEnv):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+    def seed(self, seed: int | None = None) -> Sequence[int | None]:
+        """Seed the lanes' generator with ``seed`` (an int, or None for a random one) at the next :meth:`reset`.
+
+        :raises ValueError: for anything but an int or None (lanes take one seed, not one per lane)
+        """
+        # A run-time check of user input that the annotation cannot guarantee.
+        if not (seed is None or (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool))):  # type: ignore[redundant-expr]
+            raise ValueError(f"seed must be an int or None (the lanes share one generator), got {seed!r}")
+        return super().seed(None if seed is None else int(seed))
+
+    def _get_indices(self, indices: VecEnvIndices) -> Iterable[int]:
+        """SB3's lane indices, checked: ``IndexError`` for one outside ``-n_envs .. n_envs - 1``."""
+        chosen = list(super()._get_indices(indices))
+        outside = [i for i in chosen if not -self.num_envs <= i < self.num_envs]
+        if outside:
+            raise IndexError(f"lane indices {outside} are out of range for {self.num_envs} lanes (0 .. {self.num_envs - 1})")
+        return chosen
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
         return [getattr(self, attr_name)] * len(list(self._get_indices(indices)))

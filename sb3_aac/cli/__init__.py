@@ -16,12 +16,13 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-from sb3_aac.cli.arguments import CliError, nonnegative_int
+from sb3_aac.cli.arguments import CliError, add_trust_argument, seed_int
 from sb3_aac.cli.bench import add_bench_command
 from sb3_aac.cli.envs import PROFILE_ENV_IDS, register_toy_env
 from sb3_aac.cli.evaluate import add_evaluate_commands
-from sb3_aac.cli.export import add_export_command
+from sb3_aac.cli.export import add_c_header_command, add_export_command
 from sb3_aac.cli.models import hyperparameters
+from sb3_aac.cli.push import add_push_command
 from sb3_aac.cli.render import add_render_command
 from sb3_aac.cli.train import add_train_command
 from sb3_aac.cli.tune import add_tune_command
@@ -37,6 +38,8 @@ examples:
   sb3-aac reliability runs/rbf/model.zip --out runs/rbf/reliability.png
   sb3-aac render runs/rbf/model.zip --out runs/rbf/episode.gif
   sb3-aac export runs/rbf/model.zip runs/rbf/dribbler.aacp
+  sb3-aac c-header                                  # aacp.h: the .aacp reader for C/C++ agents
+  sb3-aac push runs/rbf/model.zip --repo-id you/sarsa-aac-dribble
   sb3-aac bench
 
 MODEL is a SarsaAAC model saved by train (model.zip), a policy exported by export (.aacp), or the word
@@ -75,13 +78,16 @@ def build_parser() -> argparse.ArgumentParser:
         "--profile", choices=list(PROFILE_ENV_IDS), help="server profile (default: inferred from MODEL's spaces)"
     )
     played.add_argument(
-        "--seed", type=nonnegative_int, default=0, help="seed of the players, starts and noise (default: %(default)s)"
+        "--seed", type=seed_int, default=0, help="seed of the players, starts and noise (default: %(default)s)"
     )
+    add_trust_argument(played)
 
     add_train_command(add)
     add_evaluate_commands(add, played)
     add_render_command(add, played)
     add_export_command(add)
+    add_c_header_command(add)
+    add_push_command(add)
     add_bench_command(add)
     add_tune_command(add)
     return parser

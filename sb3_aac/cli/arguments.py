@@ -33,9 +33,36 @@ def _checked(parse: Callable[[str], Any], what: str, accept: Callable[[Any], boo
     return convert
 
 
-positive_int = _checked(lambda text: int(text.replace("_", "")), "a whole number", lambda v: v >= 1, "positive (>= 1)")
+def _whole(text: str) -> int:
+    return int(text.replace("_", ""))
+
+
+positive_int = _checked(_whole, "a whole number", lambda v: v >= 1, "positive (>= 1)")
 positive_float = _checked(float, "a number", lambda v: v > 0 and math.isfinite(v), "a positive number")
-nonnegative_int = _checked(int, "a whole number", lambda v: v >= 0, ">= 0")
+
+# Limits of sizes and numbers a command accepts, so that a typo is a one-line refusal rather than an allocation
+# that fails after minutes (or a traceback from deep inside numpy or torch).
+MAX_SEED = 2**32 - 1  # numpy's legacy seeding, which SB3's set_random_seed calls, takes 0 .. 2**32 - 1
+MAX_LANES = 65_536  # envs stepped side by side: 4,096 lanes already saturate a core
+MAX_EPISODES = 10_000_000
+MAX_TIMESTEPS = 10**11  # env steps: days of training at millions of steps a second
+MIN_FPS, MAX_FPS = 0.1, 1000.0
+seed_int = _checked(_whole, "a whole number", lambda v: 0 <= v <= MAX_SEED, f"in 0 .. {MAX_SEED} (2**32 - 1)")
+lane_count = _checked(_whole, "a whole number", lambda v: 1 <= v <= MAX_LANES, f"in 1 .. {MAX_LANES:,}")
+episode_count = _checked(_whole, "a whole number", lambda v: 1 <= v <= MAX_EPISODES, f"in 1 .. {MAX_EPISODES:,}")
+episode_count_or_zero = _checked(_whole, "a whole number", lambda v: 0 <= v <= MAX_EPISODES, f"in 0 .. {MAX_EPISODES:,}")
+step_count = _checked(_whole, "a whole number", lambda v: 1 <= v <= MAX_TIMESTEPS, f"in 1 .. {MAX_TIMESTEPS:.0e}")
+frame_rate = _checked(float, "a number", lambda v: MIN_FPS <= v <= MAX_FPS, f"in {MIN_FPS} .. {MAX_FPS:g} frames per second")
+
+
+def add_trust_argument(parser: argparse.ArgumentParser) -> None:
+    """``--trust``: load a model.zip with its pickled entries (which runs code from the file), as SB3's ``load`` does."""
+    parser.add_argument(
+        "--trust",
+        action="store_true",
+        help="load a model.zip whose pickled entries this command cannot stand in for (runs code from the file: only "
+        "for files you or someone you trust made; by default nothing of a model.zip is unpickled)",
+    )
 
 
 def key_value(text: str) -> tuple[str, Any]:

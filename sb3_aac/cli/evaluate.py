@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from sb3_aac.cli.arguments import output_file, positive_int, written
+from sb3_aac.cli.arguments import episode_count, output_file, written
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
 from sb3_aac.cli.models import load_policy
 from sb3_aac.cli.reports import print_dribble_report, reliability_figure
@@ -23,7 +23,7 @@ def add_evaluate_commands(add: Any, played: argparse.ArgumentParser) -> None:
         "sb3-aac evaluate runs/rbf/model.zip --episodes 1000   |   sb3-aac evaluate dribbler --profile v11",
         (played,),
     )
-    evaluate.add_argument("--episodes", type=positive_int, default=1000, help="episodes (default: %(default)s)")
+    evaluate.add_argument("--episodes", type=episode_count, default=1000, help="episodes (default: %(default)s)")
     evaluate.set_defaults(func=cmd_evaluate)
 
     reliability = add(
@@ -33,7 +33,7 @@ def add_evaluate_commands(add: Any, played: argparse.ArgumentParser) -> None:
         (played,),
     )
     reliability.add_argument(
-        "--players", type=positive_int, default=10_000, help="players (default: %(default)s, as the paper)"
+        "--players", type=episode_count, default=10_000, help="players (default: %(default)s, as the paper)"
     )
     reliability.add_argument("--out", default="reliability.png", help="PNG to write (default: %(default)s)")
     reliability.set_defaults(func=cmd_reliability)
@@ -42,7 +42,7 @@ def add_evaluate_commands(add: Any, played: argparse.ArgumentParser) -> None:
 def cmd_evaluate(args: argparse.Namespace) -> None:
     from robocup_dribble.evaluation import evaluate_dribbling
 
-    policy, profile = load_policy(args.model, args.profile)
+    policy, profile = load_policy(args.model, args.profile, args.trust)
     start = time.perf_counter()
     report = evaluate_dribbling(policy, args.episodes, profile=profile, seed=args.seed)
     print_dribble_report(
@@ -56,7 +56,7 @@ def cmd_reliability(args: argparse.Namespace) -> None:
     from robocup_dribble.evaluation import reliability_test
 
     out = output_file(args.out, (".png",), "--out")
-    policy, profile = load_policy(args.model, args.profile)
+    policy, profile = load_policy(args.model, args.profile, args.trust)
     report = reliability_test(policy, args.players, profile=profile, seed=args.seed)
     print(f"reliability test of {args.model} on {PROFILE_ENV_IDS[profile]}: {args.players} fresh players, one episode each")
     print(f"  {report.summary()}")

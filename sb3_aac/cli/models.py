@@ -26,7 +26,7 @@ class Algorithm(NamedTuple):
 
 PDQN_POLICY_KEYS = ("net_arch", "actor_net_arch", "param_bounding", "initial_params")
 ALGOS = {
-    "sarsa_aac": Algorithm("SarsaAAC", "TilePolicy", POLICY_KEYS),  # the README's recommended policy
+    "sarsa_aac": Algorithm("SarsaAAC", "TilePolicy", POLICY_KEYS),  # the recommended policy (docs/sarsa_aac.md)
     "pdqn": Algorithm("PDQN", "MlpPolicy", PDQN_POLICY_KEYS),
     "mpdqn": Algorithm("MPDQN", "MlpPolicy", PDQN_POLICY_KEYS),
     "hppo": Algorithm("HybridPPO", "MlpPolicy", ("net_arch", "ortho_init", "log_std_init")),
@@ -74,8 +74,9 @@ def hyperparameters(pairs: list[tuple[str, Any]], algo: str = "sarsa_aac") -> di
     return kwargs
 
 
-def load_policy(model: str, profile: str | None) -> tuple[Any, str]:
-    """A policy with ``predict`` and the dribbling profile it plays (given, or inferred from its spaces)."""
+def load_policy(model: str, profile: str | None, trust: bool = False) -> tuple[Any, str]:
+    """A policy with ``predict`` and the dribbling profile it plays (given, or inferred from its spaces); a model.zip
+    is loaded as :func:`load_model` says."""
     if model == "dribbler":
         from robocup_dribble.dribbler import HandCodedDribbler
 
@@ -91,7 +92,7 @@ def load_policy(model: str, profile: str | None) -> tuple[Any, str]:
             raise CliError(f"cannot load {path}: {error}" if isinstance(error, OSError) else str(error)) from None
         matches = [p for p in PROFILE_ENV_IDS if runtime_matches_profile(policy, p)]
     else:
-        policy = load_model(path)
+        policy = load_model(path, trust)
         matches = [p for p in PROFILE_ENV_IDS if model_matches_profile(policy, p)]
     if profile is None:
         if not matches:
@@ -106,24 +107,50 @@ def load_policy(model: str, profile: str | None) -> tuple[Any, str]:
     return policy, profile
 
 
-def load_model(path: Path) -> Any:
-    """A model.zip saved by ``train``, whichever ``--algo`` trained it, checked first
-    (:func:`~sb3_aac.common.model_files.check_model_file`): any damage is one line."""
-    from sb3_aac.common.model_files import check_model_file, load_checked
+TRUST_HINT = (
+    "loading it would run code from the file; pass --trust to load it anyway (only a file you or someone you trust "
+    "made), or share the policy as an exported .aacp"
+)
+
+
+def load_model(path: Path, trust: bool = False) -> Any:
+    """
+    A model.zip saved by ``train``, whichever ``--algo`` trained it, checked first
+    (:func:`~sb3_aac.common.model_files.check_model_file`): any damage is one line. Unless ``trust``, nothing of the
+    file is unpickled (:func:`~sb3_aac.common.model_files.pickle_free_objects` stands in for every pickled entry,
+    with the dribbling envs' spaces as the known ones); a file that needs its pickles is refused, naming the entry.
+    """
+    from sb3_aac.common.model_files import PickledEntryError, check_model_file, load_checked, pickle_free_objects
 
     errors = []
     try:
         check_model_file(path)
         for algo, (name, _, _) in ALGOS.items():
+            cls = algorithm(algo)
+            kwargs: dict[str, Any] = {}
+            if not trust:
+                try:
+                    kwargs["custom_objects"] = pickle_free_objects(path, cls.policy_aliases.values(), dribble_space_list())
+                except PickledEntryError as error:
+                    if error.entry == "policy_class":  # another algorithm's file
+                        errors.append(f"as {name}: {error}")
+                        continue
+                    raise CliError(f"{path}: {error}; {TRUST_HINT}") from None
             try:
-                return load_checked(algorithm(algo), path)
+                return load_checked(cls, path, **kwargs)
             except ValueError as error:
                 errors.append(f"as {name}: {error}")
     except ValueError as error:
         raise CliError(str(error)) from None
     except OSError as error:
         raise CliError(f"cannot load {path}: {error}") from None
-    raise CliError(f"cannot load {path}: " + "; ".join(errors))
+    hint = f" ({TRUST_HINT})" if not trust else ""
+    raise CliError(f"cannot load {path}: " + "; ".join(errors) + hint)
+
+
+def dribble_space_list() -> list[Any]:
+    """The observation and action spaces of every dribbling profile."""
+    return [space for profile in PROFILE_ENV_IDS for space in dribble_spaces(profile)]
 
 
 def dribble_spaces(profile: str) -> tuple[Any, Any]:

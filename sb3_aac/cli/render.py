@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from sb3_aac.cli.arguments import CliError, output_file, positive_float, written
+from sb3_aac.cli.arguments import CliError, frame_rate, output_file, written
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
 from sb3_aac.cli.models import load_policy
 
@@ -22,9 +22,7 @@ def add_render_command(add: Any, played: argparse.ArgumentParser) -> None:
     )
     render.add_argument("--out", default="episode.gif", help="video file, .gif or .mp4 (default: %(default)s)")
     render.add_argument("--window", action="store_true", help="show the episode in a pygame window instead of writing a file")
-    render.add_argument(
-        "--fps", type=positive_float, default=10.0, help="frames per second (default: %(default)s, server cycles)"
-    )
+    render.add_argument("--fps", type=frame_rate, default=10.0, help="frames per second (default: %(default)s, server cycles)")
     render.set_defaults(func=cmd_render)
 
 
@@ -37,7 +35,7 @@ def cmd_render(args: argparse.Namespace) -> None:
             import imageio_ffmpeg  # noqa: F401
         except ImportError:
             raise CliError("writing .mp4 needs imageio-ffmpeg (pip install imageio-ffmpeg); or write a .gif") from None
-    policy, profile = load_policy(args.model, args.profile)
+    policy, profile = load_policy(args.model, args.profile, args.trust)
     try:
         env = DribbleEnv(profile=profile, render_mode="human" if args.window else "rgb_array")
         obs, info = env.reset(seed=args.seed)

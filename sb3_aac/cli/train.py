@@ -9,11 +9,20 @@ import json
 import time
 from typing import Any
 
-from sb3_aac.cli.arguments import CliError, key_value, nonnegative_int, output_dir, positive_int
+from sb3_aac.cli.arguments import (
+    CliError,
+    episode_count,
+    episode_count_or_zero,
+    key_value,
+    lane_count,
+    output_dir,
+    seed_int,
+    step_count,
+)
 from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env, max_episode_length
 from sb3_aac.cli.models import ALGOS, POLICIES, algo_key, algorithm, hyperparameters
 from sb3_aac.cli.reports import print_dribble_report
-from sb3_aac.common.output_files import DirectoryPublisher
+from sb3_aac.common.output_files import RunFolder
 
 DEFAULT_TIMESTEPS = 100_000
 EVAL_SEED_OFFSET = 10_000  # the greedy evaluation after training plays seed + this (never the training seeds)
@@ -39,18 +48,24 @@ def add_train_command(add: Any) -> None:
     )
     budget = train.add_mutually_exclusive_group()
     budget.add_argument(
-        "--timesteps", type=positive_int, default=DEFAULT_TIMESTEPS, help="training budget in env steps (default: %(default)s)"
+        "--timesteps", type=step_count, default=DEFAULT_TIMESTEPS, help="training budget in env steps (default: %(default)s)"
     )
     budget.add_argument(
         "--episodes",
-        type=positive_int,
+        type=episode_count,
         help="training budget in episodes (schedules span episodes x max episode length steps)",
     )
-    train.add_argument("--n-envs", type=positive_int, default=16, help="envs stepped side by side (default: %(default)s)")
-    train.add_argument("--seed", type=nonnegative_int, default=0, help="random seed (default: %(default)s)")
+    train.add_argument("--n-envs", type=lane_count, default=16, help="envs stepped side by side (default: %(default)s)")
+    train.add_argument("--seed", type=seed_int, default=0, help="random seed (default: %(default)s)")
     train.add_argument("--tensorboard", metavar="DIR", help="write TensorBoard logs here (view: tensorboard --logdir DIR)")
     train.add_argument("--progress-bar", action="store_true", help="show a progress bar (tqdm, rich)")
-    train.add_argument("--out", metavar="DIR", help="save DIR/model.zip, DIR/policy.aacp (exported) and DIR/run.json")
+    train.add_argument(
+        "--out",
+        metavar="DIR",
+        help="save DIR/model.zip, DIR/policy.aacp (exported) and DIR/run.json (DIR is created if missing; nothing else "
+        "in it is touched)",
+    )
+    train.add_argument("--overwrite", action="store_true", help="replace those files if DIR already holds them")
     train.add_argument(
         "--set",
         metavar="KEY=VALUE",
@@ -62,7 +77,7 @@ def add_train_command(add: Any) -> None:
         "actor_net_arch, param_bounding, initial_params; for hppo net_arch, ortho_init, log_std_init) go into policy_kwargs",
     )
     train.add_argument(
-        "--eval-episodes", type=nonnegative_int, default=1000, help="greedy evaluation episodes after training (0: none)"
+        "--eval-episodes", type=episode_count_or_zero, default=1000, help="greedy evaluation episodes after training (0: none)"
     )
     train.add_argument(
         "--gym-package", action="append", default=[], metavar="MODULE", help="import MODULE first (registers envs)"
@@ -72,7 +87,7 @@ def add_train_command(add: Any) -> None:
 
 
 def cmd_train(args: argparse.Namespace) -> None:
-    """Check everything the user named, then train, save and evaluate; a failure leaves no partial ``--out``."""
+    """Check everything the user named, then train, save and evaluate; each file of ``--out`` is the old or a whole new one."""
     import_gym_packages(args.gym_package)
     check_env_id(args.env)
     kwargs = hyperparameters(args.set, args.algo)
@@ -81,30 +96,42 @@ def cmd_train(args: argparse.Namespace) -> None:
         raise CliError(f"--algo {args.algo} has one policy, MlpPolicy, not {args.policy}")
     if args.tensorboard is not None:
         output_dir(args.tensorboard, "--tensorboard directory")
-    publisher = run_publisher(args.out) if args.out is not None else None
+    folder = run_folder(args) if args.out is not None else None
+    total_timesteps, budget = training_budget(args)
+    model = build_model(args, kwargs)
+    print(
+        f"training {ALGOS[args.algo].class_name} {args.policy} on {args.env} for {budget}, "
+        f"{args.n_envs} env(s), seed {args.seed}"
+    )
     try:
-        total_timesteps, budget = training_budget(args)
-        model = build_model(args, kwargs)
-        print(
-            f"training {ALGOS[args.algo].class_name} {args.policy} on {args.env} for {budget}, "
-            f"{args.n_envs} env(s), seed {args.seed}"
-        )
         learn(model, args, total_timesteps)
-        if publisher is not None:
-            save_run(model, publisher, run_settings(args, model, kwargs))
-        if args.eval_episodes > 0:
-            evaluate_greedy(model, args)
-    finally:
-        if publisher is not None:
-            publisher.discard()
+    except KeyboardInterrupt:
+        if folder is None:
+            print(f"interrupted after {model.num_timesteps} steps: nothing was kept (give --out DIR to keep a run)")
+        else:
+            print(f"interrupted after {model.num_timesteps} steps: saving the model trained so far")
+            save_run(model, folder, {**run_settings(args, model, kwargs), "interrupted": True})
+        raise
+    if folder is not None:
+        save_run(model, folder, run_settings(args, model, kwargs))
+    if args.eval_episodes > 0:
+        evaluate_greedy(model, args)
 
 
-def run_publisher(out: str) -> DirectoryPublisher:
-    """The ``--out`` directory, checked before training; its files are staged and published as one set."""
+def run_folder(args: argparse.Namespace) -> RunFolder:
+    """The ``--out`` folder, checked before training: writable, and not holding the run's files unless --overwrite."""
+    names = ("model.zip", "policy.aacp", "run.json") if exported(args.algo) else ("model.zip", "run.json")
+    if not args.out:
+        raise CliError("cannot write --out directory '': give a folder name, e.g. runs/name")
     try:
-        return DirectoryPublisher(out, "--out directory")
+        return RunFolder(args.out, names, "--out directory", overwrite=args.overwrite)
     except ValueError as error:
         raise CliError(str(error)) from None
+
+
+def exported(algo: str) -> bool:
+    """Whether ``train --out`` exports the policy (the .aacp format carries SarsaAAC's approximators, docs/pdqn.md)."""
+    return algo == "sarsa_aac"
 
 
 def training_budget(args: argparse.Namespace) -> tuple[int, str]:
@@ -149,7 +176,7 @@ def learn(model: Any, args: argparse.Namespace, total_timesteps: int) -> None:
     except FloatingPointError as error:
         raise CliError(str(error)) from None
     seconds = time.perf_counter() - start
-    print(f"trained {model.num_timesteps} steps ({model._episode_num} episodes) in {seconds:.1f} s")
+    print(f"trained {model.num_timesteps} steps ({model.episode_num} episodes) in {seconds:.1f} s")
 
 
 def run_settings(args: argparse.Namespace, model: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
@@ -161,26 +188,27 @@ def run_settings(args: argparse.Namespace, model: Any, kwargs: dict[str, Any]) -
         "seed": args.seed,
         "n_envs": args.n_envs,
         "timesteps": model.num_timesteps,
-        "episodes": model._episode_num,
+        "episodes": model.episode_num,
         "hyperparameters": {k: repr(v) for k, v in kwargs.items()},
     }
 
 
-def save_run(model: Any, publisher: DirectoryPublisher, settings: dict[str, Any]) -> None:
-    """Write model.zip, policy.aacp (SarsaAAC only) and run.json into the staging directory, then publish them together."""
+def save_run(model: Any, folder: RunFolder, settings: dict[str, Any]) -> None:
+    """Write model.zip, policy.aacp (SarsaAAC only) and, last, run.json into the ``--out`` folder, each in one step."""
     from sb3_aac import export_policy
 
-    staging = publisher.staging
-    exported = settings["algo"] == "sarsa_aac"  # the .aacp format carries SarsaAAC's approximators only (docs/pdqn.md)
+    out = folder.out
     try:
-        model.save(staging / "model.zip")
-        if exported:
-            export_policy(model, staging / "policy.aacp", metadata={"env_id": settings["env_id"]})
-        (staging / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
-        out = publisher.publish()
+        with folder.file("model.zip") as tmp:
+            model.save(tmp)
+        if exported(settings["algo"]):
+            with folder.file("policy.aacp") as tmp:
+                export_policy(model, tmp, metadata={"env_id": settings["env_id"]})
+        with folder.file("run.json") as tmp:
+            tmp.write_text(json.dumps(settings, indent=2) + "\n")
     except OSError as error:
-        raise CliError(f"cannot write the run to {publisher.out}: {error.strerror or error}") from None
-    runtime = f", {out / 'policy.aacp'} (RuntimePolicy.load)" if exported else ""
+        raise CliError(f"cannot write the run to {out}: {error.strerror or error}") from None
+    runtime = f", {out / 'policy.aacp'} (RuntimePolicy.load)" if exported(settings["algo"]) else ""
     print(f"saved {out / 'model.zip'} ({ALGOS[settings['algo']].class_name}.load){runtime} and {out / 'run.json'}")
 
 

@@ -7,7 +7,7 @@ import argparse
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from sb3_aac.cli.arguments import CliError, key_value, nonnegative_int, positive_int
+from sb3_aac.cli.arguments import CliError, episode_count, key_value, lane_count, positive_int, seed_int, step_count
 from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env
 from sb3_aac.cli.models import ALGOS, POLICIES, algo_key, hyperparameters
 
@@ -45,16 +45,16 @@ def add_tune_command(add: Callable[..., argparse.ArgumentParser]) -> None:
         "--trials", type=positive_int, default=20, help="finished trials the study should hold (default: %(default)s)"
     )
     tune.add_argument(
-        "--timesteps", type=positive_int, default=100_000, help="training steps per trial and seed (default: %(default)s)"
+        "--timesteps", type=step_count, default=100_000, help="training steps per trial and seed (default: %(default)s)"
     )
     tune.add_argument(
         "--eval-every",
-        type=positive_int,
+        type=step_count,
         help=f"steps between pruning evaluations (default: timesteps / {EVALUATIONS_PER_TRIAL})",
     )
     tune.add_argument(
         "--eval-episodes",
-        type=positive_int,
+        type=episode_count,
         default=100,
         help="episodes per greedy evaluation, the same each time (default: %(default)s)",
     )
@@ -70,9 +70,9 @@ def add_tune_command(add: Callable[..., argparse.ArgumentParser]) -> None:
         "(default: %(default)s)",
     )
     tune.add_argument("--study-name", help="default: ALGO-POLICY-ENV; the same name and storage resume a study")
-    tune.add_argument("--n-envs", type=positive_int, default=16, help="envs stepped side by side (default: %(default)s)")
+    tune.add_argument("--n-envs", type=lane_count, default=16, help="envs stepped side by side (default: %(default)s)")
     tune.add_argument(
-        "--seed", type=nonnegative_int, default=0, help="training seed of every trial; sampler seed (default: %(default)s)"
+        "--seed", type=seed_int, default=0, help="training seed of every trial; sampler seed (default: %(default)s)"
     )
     tune.add_argument(
         "--seeds-per-trial",

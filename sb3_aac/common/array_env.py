@@ -15,6 +15,12 @@ The protocol (duck-typed: the env needs no import from this package):
 - The env auto-resets like an SB3 ``VecEnv``: ``observations`` rows of lanes whose episode ended hold the
   first observation of their next episode, and ``terminal_observations`` holds the last one.
 - ``step`` (the SB3 form, tuples in, info dicts out) stays available and gives the same transitions.
+
+:func:`step_as_vec_env` steps an array env and returns what SB3's ``VecEnv.step`` would, which is what every
+algorithm here hands its callbacks (``locals()["infos"]``, ``["dones"]``, ``["rewards"]``, ``["new_obs"]``) whichever
+path it stepped; ``locals()["actions"]`` is the env's actions (a sequence of Gymnasium actions) on the SB3 path and
+the pair ``(action_types, scaled_params)`` of ``(N,)`` 0-based types and ``(N, n_params)`` parameters in ``[-1, 1]``
+on the array path.
 """
 
 from __future__ import annotations
@@ -62,3 +68,24 @@ def array_path(env: Any) -> ArrayVecEnv | None:
     so a ``VecNormalize`` around an array env would otherwise be bypassed.
     """
     return env if callable(getattr(type(env), "step_arrays", None)) else None
+
+
+def step_as_vec_env(
+    env: ArrayVecEnv, action_types: np.ndarray, params: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
+    """
+    One :meth:`~ArrayVecEnv.step_arrays` call, returned as SB3's ``VecEnv.step`` would: ``(observations, rewards,
+    dones, infos)``. ``infos`` is a list of N dicts: empty where the episode goes on; where it ended, the episode's
+    statistics (``episode_info``), ``"episode"`` ``{"r", "l"}`` (as SB3's ``Monitor``), ``"terminal_observation"`` and
+    ``"TimeLimit.truncated"``.
+    """
+    step = env.step_arrays(action_types, params)
+    dones = step.terminated | step.truncated
+    infos: list[dict[str, Any]] = [{} for _ in range(len(dones))]
+    for i in np.flatnonzero(dones):
+        info = infos[i]
+        info.update((key, values[i]) for key, values in step.episode_info.items())
+        info["episode"] = {"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])}
+        info["terminal_observation"] = step.terminal_observations[i]
+        info["TimeLimit.truncated"] = bool(step.truncated[i])
+    return step.observations, step.rewards, dones, infos

@@ -4,8 +4,9 @@ Check a saved model (Stable-Baselines3's ``model.zip``) before loading it, so ev
 
 The check reads the archive without unpickling anything: the zip's structure and CRCs, the ``data`` member as a
 JSON object with the keys ``load`` needs, and every ``*.pth`` member with ``torch.load(weights_only=True)`` as a
-dictionary of finite tensors. It cannot make loading a ``.zip`` from a stranger safe: SB3 stores some fields
-(spaces, schedules) as pickles, which ``load`` executes. Exported ``.aacp`` policies never execute anything.
+dictionary of finite tensors. The check alone cannot make loading a ``.zip`` from a stranger safe: SB3 stores some fields
+(spaces, schedules) as pickles, which ``load`` executes; :func:`pickle_free_objects` stands in for every one of them
+(what the command line does unless told to trust the file). Exported ``.aacp`` policies never execute anything.
 """
 
 from __future__ import annotations
@@ -13,8 +14,10 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import zipfile
 import zlib
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -147,3 +150,111 @@ def load_checked(cls: Any, path: Any, **kwargs: Any) -> Any:
         if isinstance(error, ValueError) and text.startswith(str(name)):
             raise ValueError(text) from error
         raise _fail(name, f"{cls.__name__}.load failed ({type(error).__name__}: {text[:300]})") from error
+
+
+# A pickled entry's readable fields may name memory addresses, which differ between processes.
+_ADDRESS = re.compile(r" at 0x[0-9a-fA-F]+")
+# Stand-ins for the pickled entries acting does not read, by type: the state of a run under way (last observations,
+# episode statistics, running moments: None, which ``learn`` starts afresh) and off-policy training's collection
+# frequency (a NamedTuple that prints no fields: one step).
+TRAINING_ONLY_STAND_INS: dict[str, Any] = {
+    "<class 'numpy.ndarray'>": None,
+    "<class 'collections.deque'>": None,
+    "<class 'stable_baselines3.common.type_aliases.TrainFreq'>": (1, "step"),
+}
+# SB3's schedules print their numbers exactly (Python's shortest round-trip float repr), so they are rebuilt from them.
+_SCHEDULE = re.compile(r"^(ConstantSchedule\(val=(?P<val>[^,()]+)\)|LinearSchedule\(start=(?P<start>[^,()]+), "
+                       r"end=(?P<end>[^,()]+), end_fraction=(?P<fraction>[^,()]+)\))$")  # fmt: skip
+
+
+class PickledEntryError(ValueError):
+    """A pickled entry of a model.zip that :func:`pickle_free_objects` cannot stand in for (``entry`` names it)."""
+
+    def __init__(self, message: str, entry: str) -> None:
+        super().__init__(message)
+        self.entry = entry
+
+
+def _readable_fields(serialized: dict[str, Any]) -> dict[str, Any]:
+    """What SB3 wrote beside a pickle for humans (type and first-level fields), without addresses or RNG state."""
+    return {
+        key: _ADDRESS.sub("", value) if isinstance(value, str) else value
+        for key, value in serialized.items()
+        if key not in (":serialized:", "_np_random")
+    }
+
+
+def _description(obj: Any) -> dict[str, Any]:
+    """The readable fields SB3 writes for ``obj`` when it pickles it."""
+    from stable_baselines3.common.save_util import data_to_json
+
+    entry = json.loads(data_to_json({"entry": obj}))["entry"]
+    return _readable_fields(entry) if isinstance(entry, dict) and ":serialized:" in entry else {}
+
+
+def _schedule(fields: dict[str, Any]) -> Any:
+    """An SB3 schedule rebuilt from its readable fields, or None if they do not describe a constant or linear one."""
+    from stable_baselines3.common.utils import ConstantSchedule, FloatSchedule, LinearSchedule
+
+    kind = fields.get(":type:", "")
+    text = {
+        "<class 'stable_baselines3.common.utils.FloatSchedule'>": fields.get("value_schedule"),
+        "<class 'stable_baselines3.common.utils.ConstantSchedule'>": f"ConstantSchedule(val={fields.get('val')})",
+        "<class 'stable_baselines3.common.utils.LinearSchedule'>": (
+            f"LinearSchedule(start={fields.get('start')}, end={fields.get('end')}, end_fraction={fields.get('end_fraction')})"
+        ),
+    }.get(kind)
+    match = _SCHEDULE.match(text) if isinstance(text, str) else None
+    if match is None:
+        return None
+    try:
+        if match["val"] is not None:
+            schedule: Any = ConstantSchedule(float(match["val"]))
+        else:
+            schedule = LinearSchedule(float(match["start"]), float(match["end"]), float(match["fraction"]))
+    except ValueError:
+        return None
+    return FloatSchedule(schedule) if kind.endswith("FloatSchedule'>") else schedule
+
+
+def pickle_free_objects(path: Any, policy_classes: Iterable[type], spaces: Iterable[Any]) -> dict[str, Any]:
+    """
+    ``custom_objects`` for :meth:`~stable_baselines3.common.base_class.BaseAlgorithm.load` that stand in for every
+    pickled entry of the model file ``path``, so that loading unpickles nothing (SB3 takes an entry named in
+    ``custom_objects`` instead of reading it). The weights are read with ``torch.load(weights_only=True)`` as usual.
+
+    - ``policy_class``: the one of ``policy_classes`` whose readable fields (module, docstring, methods) the file
+      repeats; ``observation_space`` and ``action_space``: the one of ``spaces`` whose readable fields (type, dtype,
+      shape, bounds as numpy prints them) the file repeats;
+    - SB3's constant and linear schedules: rebuilt from the numbers they print (exactly);
+    - what acting does not read (:data:`TRAINING_ONLY_STAND_INS`: numpy arrays and deques, ``TrainFreq``): None, or
+      one step. The loaded model predicts and exports as the file's model does; to go on training it, load it the
+      usual way.
+
+    A file's readable fields are only compared, never trusted: whatever its pickles hold is not run.
+
+    :raises PickledEntryError: naming the first entry that none of these can stand in for (a class, callable or
+        space of the user's own): loading it needs its pickle, i.e. trusting the file
+    """
+    check_model_file(path)
+    with zipfile.ZipFile(model_zip_path(path) if isinstance(path, (str, os.PathLike)) else path) as archive:
+        data = json.loads(archive.read("data").decode("utf-8"))
+    candidates = {"policy_class": list(policy_classes), "observation_space": list(spaces), "action_space": list(spaces)}
+    objects: dict[str, Any] = {}
+    for key, entry in data.items():
+        if not (isinstance(entry, dict) and ":serialized:" in entry):
+            continue
+        fields = _readable_fields(entry)
+        if key in candidates:
+            found = [c for c in candidates[key] if _description(c) == fields]
+            if not found:
+                raise PickledEntryError(f"its {key} ({fields.get(':type:')}) is none of the known ones", key)
+            objects[key] = found[0]
+        elif fields.get(":type:") in TRAINING_ONLY_STAND_INS:
+            objects[key] = TRAINING_ONLY_STAND_INS[fields[":type:"]]
+        else:
+            schedule = _schedule(fields)
+            if schedule is None:
+                raise PickledEntryError(f"its entry {key!r} is a pickled {fields.get(':type:')}", key)
+            objects[key] = schedule
+    return objects

@@ -1,6 +1,6 @@
 """
-Writing outputs so that nothing is half-written: check a place first, replace a file in one step, publish a
-directory of files as one set.
+Writing outputs so that nothing is half-written and nothing of the user's is lost: check a place first, replace a file
+in one step, write a run's files into a folder without touching anything else there.
 
 Every temporary this module makes is a hidden name beside its target that carries the writer's process id
 (``.<name>.sb3aac-<pid>.tmp...``), so a later run can tell a dead writer's leftovers (removed by
@@ -10,8 +10,6 @@ Every temporary this module makes is a hidden name beside its target that carrie
 from __future__ import annotations
 
 import contextlib
-import ctypes
-import errno
 import os
 import re
 import shutil
@@ -20,13 +18,18 @@ from collections.abc import Iterator
 from pathlib import Path
 
 _TEMPORARY = re.compile(r"^\..+\.sb3aac-(\d+)\.tmp")  # .<name>.sb3aac-<pid>.tmp<random>[suffix]; nobody else's
-_RENAME_EXCHANGE = 2  # linux/fs.h: swap the two paths atomically (renameat2)
-_AT_FDCWD = -100
 
 
 def temporary_prefix(path: Path) -> str:
     """The prefix of this process's temporaries for ``path``: hidden, with the writer's pid."""
     return f".{path.name}.sb3aac-{os.getpid()}.tmp"
+
+
+def current_umask() -> int:
+    """The process's umask (read by setting it and putting it back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def pid_alive(pid: int) -> bool:
@@ -60,7 +63,8 @@ def remove_stale_temporaries(folder: Path) -> list[Path]:
 def check_writable_file(path: str | os.PathLike[str], what: str) -> Path:
     """
     Check, before any work, that a file can be written at ``path``: its folder exists or can be created and takes a
-    new file (probed by creating and removing a temporary; permission bits alone are not enough, e.g. as root).
+    new file (probed by creating and removing a temporary; permission bits alone are not enough, e.g. as root). The
+    temporaries a killed earlier writer left in that folder are removed.
 
     :raises ValueError: saying why not
     """
@@ -69,6 +73,7 @@ def check_writable_file(path: str | os.PathLike[str], what: str) -> Path:
         if out.is_dir():
             raise ValueError(f"{what} {str(out)!r} is a directory; give a file name")
         out.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale_temporaries(out.parent)  # a killed earlier writer's
         fd, probe = tempfile.mkstemp(dir=out.parent, prefix=temporary_prefix(out))
         os.close(fd)
         os.unlink(probe)
@@ -110,9 +115,10 @@ def _fsync_dir(folder: Path) -> None:
 @contextlib.contextmanager
 def replaced_atomically(path: str | os.PathLike[str], suffix: str = "") -> Iterator[Path]:
     """
-    Yield a temporary file name beside ``path``; when the block ends without error the file is flushed to disk and
-    replaces ``path`` in one step (``os.replace``), on error it is removed. Readers see the old file or the whole
-    new one, never a part.
+    Yield a temporary file name beside ``path``; when the block ends without error the file is flushed to disk, given
+    the permissions a new file gets under the umask (``0o666 & ~umask``; the temporary was private while written),
+    and replaces ``path`` in one step (``os.replace``); on error (or Ctrl-C) it is removed. Readers see the old file
+    or the whole new one, never a part; a full disk leaves the old file as it was.
 
     :param suffix: the temporary's suffix (some writers insist on one, e.g. ``.zip``)
     """
@@ -124,6 +130,7 @@ def replaced_atomically(path: str | os.PathLike[str], suffix: str = "") -> Itera
         yield Path(tmp)
         with open(tmp, "rb+") as f:
             os.fsync(f.fileno())
+        os.chmod(tmp, 0o666 & ~current_umask())
         os.replace(tmp, path)
         _fsync_dir(path.parent)
     except BaseException:
@@ -132,108 +139,37 @@ def replaced_atomically(path: str | os.PathLike[str], suffix: str = "") -> Itera
         raise
 
 
-def _exchange(a: Path, b: Path) -> bool:
-    """Swap two paths in one step (Linux ``renameat2(RENAME_EXCHANGE)``); False where the system cannot."""
-    try:
-        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
-    except (AttributeError, OSError):
-        return False
-    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
-        return True
-    code = ctypes.get_errno()
-    if code in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP):
-        return False
-    raise OSError(code, os.strerror(code), str(a), None, str(b))
-
-
-def _link_tree(source: Path, target: Path, skip: set[str]) -> None:
-    """Hard-link (or copy, where links fail) every entry of ``source`` except ``skip`` into ``target``."""
-    for entry in source.iterdir():
-        if entry.name in skip or _TEMPORARY.match(entry.name):
-            continue
-        if entry.is_dir() and not entry.is_symlink():
-            shutil.copytree(entry, target / entry.name, symlinks=True, copy_function=_link_or_copy)
-        else:
-            _link_or_copy(entry, target / entry.name)
-
-
-def _link_or_copy(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> None:
-    if os.path.islink(source):
-        os.symlink(os.readlink(source), target)
-        return
-    try:
-        os.link(source, target)
-    except OSError:
-        shutil.copy2(source, target)
-
-
-class DirectoryPublisher:
+class RunFolder:
     """
-    Write a set of files into a directory as one unit: the files are written to a hidden staging directory beside
-    ``out`` (its name carries this process's id), and :meth:`publish` swaps it with ``out`` in one step, so ``out``
-    holds either its earlier complete set or the new complete set, never a mix or a part.
+    A folder that receives a run's files: each file is written to a temporary beside it and renamed into place
+    (:func:`replaced_atomically`), so a reader sees the old file or the whole new one, never a part. Nothing else in
+    the folder is touched: no file the run does not write is removed or replaced, the folder itself is never
+    replaced (a symbolic link to a folder is followed, and stays a link), and its permissions stay as they are.
 
-    Other entries of an existing ``out`` (a plot, a TensorBoard folder) are kept: they are hard-linked into the
-    staging directory before the swap. Where the system cannot swap two directories in one step (not Linux, or a
-    file system without ``RENAME_EXCHANGE``), the old directory is renamed aside and the new one renamed into place:
-    a kill between the two renames leaves ``out`` missing and the old set in the hidden directory.
-
-    :param out: the directory to publish
+    :param out: the folder; created (with the umask's permissions) if missing
+    :param names: the files the run will write into it
     :param what: how error messages name it (e.g. ``"--out directory"``)
-    :raises ValueError: at construction, if ``out`` is an existing file, or cannot be written or swapped (checked
-        by creating the staging directory and a probe file in ``out``)
+    :param overwrite: replace files of these names that are already there; if False (the default), their presence
+        is an error before any work
+    :raises ValueError: at construction, if ``out`` is an existing file, cannot be written (probed by creating a
+        temporary), or already holds one of ``names`` without ``overwrite``
     """
 
-    def __init__(self, out: str | os.PathLike[str], what: str):
-        self.out = Path(os.path.abspath(out))
-        if not os.fspath(out) or Path.cwd().is_relative_to(self.out):
+    def __init__(self, out: str | os.PathLike[str], names: tuple[str, ...], what: str, overwrite: bool = False):
+        self.out, self.names, self.what = Path(out), names, what
+        check_writable_dir(self.out, what)
+        remove_stale_temporaries(self.out)
+        taken = [name for name in names if os.path.lexists(self.out / name)]
+        if taken and not overwrite:
             raise ValueError(
-                f"{what} {os.fspath(out)!r} holds the current directory; give a folder of its own, e.g. runs/name"
+                f"{what} {str(self.out)!r} already holds {', '.join(taken)}: pass --overwrite to replace "
+                f"{'it' if len(taken) == 1 else 'them'}, or give another folder"
             )
-        try:
-            if self.out.exists() and not self.out.is_dir():
-                raise ValueError(f"{what} {str(self.out)!r} is an existing file; give a directory")
-            self.out.parent.mkdir(parents=True, exist_ok=True)
-            remove_stale_temporaries(self.out.parent)
-            self.staging = Path(tempfile.mkdtemp(dir=self.out.parent, prefix=temporary_prefix(self.out)))
-        except (OSError, ValueError) as error:  # ValueError: a NUL byte in the name, or the checks above
-            raise ValueError(_why_not(what, self.out, error)) from None
-        if self.out.is_dir():
-            try:
-                fd, probe = tempfile.mkstemp(dir=self.out, prefix=".probe.")
-                os.close(fd)
-                os.unlink(probe)
-                if os.stat(self.out).st_dev != os.stat(self.staging).st_dev:
-                    raise OSError(errno.EXDEV, f"it is a mount point; give a folder inside it, e.g. {self.out / 'run'}")
-            except OSError as error:
-                self.discard()
-                raise ValueError(f"cannot write {what} {str(self.out)!r}: {error.strerror or error}") from None
 
-    def discard(self) -> None:
-        """Remove the staging directory (nothing is published)."""
-        shutil.rmtree(self.staging, ignore_errors=True)
-
-    def publish(self) -> Path:
-        """Swap the staging directory's files into ``out`` as one set; returns ``out``."""
-        for entry in self.staging.iterdir():
-            if entry.is_file():
-                with open(entry, "rb+") as f:
-                    os.fsync(f.fileno())
-        if not self.out.exists():
-            os.rename(self.staging, self.out)
-            _fsync_dir(self.out.parent)
-            return self.out
-        _link_tree(self.out, self.staging, skip={entry.name for entry in self.staging.iterdir()})
-        _fsync_dir(self.staging)
-        if not _exchange(self.staging, self.out):
-            aside = Path(tempfile.mkdtemp(dir=self.out.parent, prefix=temporary_prefix(self.out)))
-            try:
-                os.rename(self.out, aside / "old")
-            except BaseException:
-                aside.rmdir()
-                raise
-            os.rename(self.staging, self.out)
-            self.staging = aside
-        _fsync_dir(self.out.parent)
-        self.discard()  # now the earlier directory
-        return self.out
+    @contextlib.contextmanager
+    def file(self, name: str) -> Iterator[Path]:
+        """A temporary name that replaces ``out/name`` (one of ``names``) in one step once the block succeeds."""
+        if name not in self.names:
+            raise ValueError(f"{name!r} is not one of the files this run writes ({', '.join(self.names)})")
+        with replaced_atomically(self.out / name, suffix=Path(name).suffix) as tmp:
+            yield tmp

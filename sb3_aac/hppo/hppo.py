@@ -13,7 +13,11 @@ from stable_baselines3.common.utils import FloatSchedule, explained_variance, ob
 from stable_baselines3.common.vec_env import VecEnv
 from torch.nn import functional as F
 
-from sb3_aac.common.array_env import ArrayStep, array_path
+from sb3_aac.common.action_stats import ActionStats
+from sb3_aac.common.array_env import array_path, step_as_vec_env
+from sb3_aac.common.divergence import divergence_error
+from sb3_aac.common.episode_stats import EpisodeStatsMixin
+from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.hppo.buffers import HybridRolloutBuffer
 from sb3_aac.hppo.policies import HybridActorCriticPolicy, MlpPolicy
@@ -28,7 +32,7 @@ def clipped_surrogate(advantages: th.Tensor, log_ratio: th.Tensor, clip_range: f
     return loss, ((ratio - 1).abs() > clip_range).float().mean()
 
 
-class HybridPPO(OnPolicyAlgorithm):
+class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
     """
     Hybrid Proximal Policy Optimization (H-PPO) for parameterized actions: pick one of K action types and its
     parameters.
@@ -49,8 +53,10 @@ class HybridPPO(OnPolicyAlgorithm):
     ``n_epochs`` passes of Adam over minibatches (one optimizer: with separate networks the parts' gradients do not
     mix). ``target_kl`` stops the epochs early on the KL estimate of the joint ratio. The executed parameters are the
     Gaussian samples clipped to the bounds (see :class:`~sb3_aac.hppo.distributions.HybridDistribution`). Envs offering
-    the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; callbacks then see
-    ``dones``, ``rewards``, ``new_obs``, ``k`` and ``params`` in their locals, but ``infos`` is None.
+    the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; callbacks see the same locals
+    on both paths (``infos`` with one dict per lane; ``actions`` the env actions, or ``(k, params)`` on the array path,
+    as :mod:`sb3_aac.common.array_env` documents), plus ``k`` and ``params`` (the executed type and clipped scaled
+    parameters) and ``packed`` (the sampled ``[k, x]`` rows).
 
     Training stops with a ``FloatingPointError`` naming the part (the policy's output, the discrete or parameter
     policy loss, the value loss, or a network's gradients) as soon as one becomes non-finite, before the optimizer
@@ -75,6 +81,8 @@ class HybridPPO(OnPolicyAlgorithm):
     :param max_grad_norm: Maximum norm of the gradient of the loss (over all networks)
     :param target_kl: Stop the epochs of an update when the approximate KL divergence exceeds 1.5 times this (None:
         no limit)
+    :param info_keywords: Keys of ``info`` read at the step where an episode ends and logged as
+        ``rollout/ep_<key>_mean`` (mean over the last ``stats_window_size`` episodes that reported it)
     :param stats_window_size: Window size for the rollout logging
     :param tensorboard_log: the log location for tensorboard (if None, no logging)
     :param policy_kwargs: Additional arguments of the policy on creation (see :class:`HybridActorCriticPolicy`)
@@ -107,6 +115,7 @@ class HybridPPO(OnPolicyAlgorithm):
         vf_coef: float = 0.5,
         max_grad_norm: float = 0.5,
         target_kl: float | None = None,
+        info_keywords: tuple[str, ...] = ("distance", "ball_lost"),
         stats_window_size: int = 100,
         tensorboard_log: str | None = None,
         policy_kwargs: dict[str, Any] | None = None,
@@ -146,6 +155,7 @@ class HybridPPO(OnPolicyAlgorithm):
         self.normalize_advantage = normalize_advantage
         self.param_ent_coef = param_ent_coef
         self.target_kl = target_kl
+        self._set_info_keywords(info_keywords)
         if _init_setup_model:
             self._setup_model()
 
@@ -196,11 +206,14 @@ class HybridPPO(OnPolicyAlgorithm):
             self.clip_range if self.clip_range_params is None else self.clip_range_params
         )
         self.clip_range_vf_schedule = None if self.clip_range_vf is None else FloatSchedule(self.clip_range_vf)
+        self._action_stats = ActionStats(self.policy.spec)
+        self._reset_keyword_buffers()
 
     def _excluded_save_params(self) -> list[str]:
         # The schedules are rebuilt by _setup_model from the saved clip_range* values.
         return [
             *super()._excluded_save_params(),
+            "_action_stats",
             "clip_range_schedule",
             "clip_range_params_schedule",
             "clip_range_vf_schedule",
@@ -225,36 +238,40 @@ class HybridPPO(OnPolicyAlgorithm):
         callback.on_rollout_start()
         while n_steps < n_rollout_steps:
             with th.no_grad():
-                actions_t, values, type_log_prob, param_log_prob = self.policy(obs_as_tensor(self._last_obs, self.device))
-            actions = actions_t.cpu().numpy()
-            if not np.isfinite(actions).all():
+                packed_t, values, type_log_prob, param_log_prob = self.policy(obs_as_tensor(self._last_obs, self.device))  # type: ignore[arg-type]
+            packed = packed_t.cpu().numpy()
+            if not np.isfinite(packed).all():
                 self._raise_divergence("the policy's output (the parameter means or standard deviations)")
-            k, params = actions[:, 0].astype(np.int64), np.clip(actions[:, 1:], -1.0, 1.0)
-            infos: list[dict[str, Any]] | None = None
-            step: ArrayStep | None = None
+            k, params = packed[:, 0].astype(np.int64), np.clip(packed[:, 1:], -1.0, 1.0)
+            # Callbacks see the same locals on both paths (sb3_aac.common.array_env).
+            actions: Any
+            infos: list[dict[str, Any]]
             if arrays is not None:
-                step = arrays.step_arrays(k, spec.unscale(params))
-                new_obs, dones = step.observations, step.terminated | step.truncated
-                rewards = np.array(step.rewards, dtype=np.float32)
+                actions = (k, params)
+                new_obs, rewards, dones, infos = step_as_vec_env(arrays, k, spec.unscale(params))
+                rewards = np.array(rewards, dtype=np.float32)  # an owned copy: truncated lanes get the bootstrap added
             else:
-                new_obs, rewards, dones, infos = env.step(spec.to_env(k, params))  # type: ignore[assignment]
+                actions = spec.to_env(k, params)
+                new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
             self.num_timesteps += env.num_envs
+            check_finite_step(new_obs, rewards, self.num_timesteps)
+            self._action_stats.add(k, params, values.cpu().numpy())
             callback.update_locals(locals())
             if not callback.on_step():
                 return False
-            self._on_episodes_end(dones, infos, step)
+            self._on_episodes_end(dones, infos)
             n_steps += 1
-            self._bootstrap_truncated(rewards, dones, infos, step)
+            self._bootstrap_truncated(rewards, dones, infos)
             rollout_buffer.add(
                 self._last_obs,  # type: ignore[arg-type]
-                actions,
+                packed,
                 rewards,
                 self._last_episode_starts,  # type: ignore[arg-type]
                 values,
                 type_log_prob,
                 param_log_prob,
             )
-            self._last_obs = new_obs
+            self._last_obs = new_obs  # type: ignore[assignment]
             self._last_episode_starts = dones
         with th.no_grad():
             values = self.policy.predict_values(obs_as_tensor(new_obs, self.device))
@@ -263,41 +280,36 @@ class HybridPPO(OnPolicyAlgorithm):
         callback.on_rollout_end()
         return True
 
-    def _bootstrap_truncated(
-        self, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]] | None, step: ArrayStep | None
-    ) -> None:
+    def _bootstrap_truncated(self, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]]) -> None:
         """Add ``gamma * V(terminal observation)`` to the rewards of lanes cut by a time limit (SB3 issue #633)."""
-        if step is not None:
-            lanes = np.flatnonzero(step.truncated & ~step.terminated)
-            terminal = step.terminal_observations[lanes] if len(lanes) else None
-        else:
-            assert infos is not None
-            lanes = np.array(
-                [
-                    i
-                    for i in np.flatnonzero(dones)
-                    if infos[i].get("terminal_observation") is not None and infos[i].get("TimeLimit.truncated", False)
-                ],
-                dtype=np.int64,
-            )
-            terminal = np.stack([infos[i]["terminal_observation"] for i in lanes]) if len(lanes) else None
-        if terminal is None:
+        lanes = [
+            i
+            for i in np.flatnonzero(dones)
+            if infos[i].get("terminal_observation") is not None and infos[i].get("TimeLimit.truncated", False)
+        ]
+        if not lanes:
             return
+        terminal = np.stack([infos[i]["terminal_observation"] for i in lanes])
         with th.no_grad():
-            obs = obs_as_tensor(terminal, self.device)
-            terminal_values = self.policy.predict_values(obs).cpu().numpy()
+            terminal_values = self.policy.predict_values(obs_as_tensor(terminal, self.device)).cpu().numpy()  # type: ignore[arg-type]
         rewards[lanes] += self.gamma * terminal_values
 
-    def _on_episodes_end(self, dones: np.ndarray, infos: list[dict[str, Any]] | None, step: ArrayStep | None) -> None:
-        """Episode statistics from the info dicts (SB3's Monitor) or from the array path's ``step``."""
-        if infos is not None:
-            self._update_info_buffer(infos, dones)
-            self._episode_num += int(np.sum(dones))
-            return
-        assert step is not None and self.ep_info_buffer is not None
+    def _on_episodes_end(self, dones: np.ndarray, infos: list[dict[str, Any]]) -> None:
+        """Episode statistics (SB3's Monitor ``episode``, ``is_success`` and the ``info_keywords``) of ended lanes."""
+        self._update_info_buffer(infos, dones)
         for i in np.flatnonzero(dones):
-            self.ep_info_buffer.append({"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])})
+            self._add_episode_keywords(infos[i])
             self._episode_num += 1
+
+    def dump_logs(self, iteration: int = 0) -> None:
+        """
+        Write log data: SB3's on-policy ``rollout/`` and ``time/`` keys, the info keywords, and the executed actions'
+        type shares and per-type parameter statistics and the critic's values since the last dump
+        (:class:`~sb3_aac.common.action_stats.ActionStats`).
+        """
+        self._record_keyword_means()
+        self._action_stats.record(self.logger)
+        super().dump_logs(iteration)
 
     # ------------------------------------------------------------------ training
 
@@ -309,7 +321,6 @@ class HybridPPO(OnPolicyAlgorithm):
         progress = self._current_progress_remaining
         clip_type, clip_params = self.clip_range_schedule(progress), self.clip_range_params_schedule(progress)
         clip_vf = None if self.clip_range_vf_schedule is None else self.clip_range_vf_schedule(progress)
-        self._record_type_shares()
 
         stats: dict[str, list[float]] = {
             key: []
@@ -397,13 +408,6 @@ class HybridPPO(OnPolicyAlgorithm):
         if clip_vf is not None:
             self.logger.record("train/clip_range_vf", clip_vf)
 
-    def _record_type_shares(self) -> None:
-        """``rollout/type_freq_<k>``: the share of each action type in the rollout just collected."""
-        types = self.rollout_buffer.actions[..., 0].astype(np.int64).ravel()
-        counts = np.bincount(types, minlength=self.policy.spec.n_types)
-        for k, count in enumerate(counts):
-            self.logger.record(f"rollout/type_freq_{k}", count / len(types))
-
     def _check_losses(self, losses: dict[str, float]) -> None:
         # The value loss first: a non-finite reward reaches the returns (value loss) and the advantages (policy losses).
         parts = {
@@ -427,12 +431,11 @@ class HybridPPO(OnPolicyAlgorithm):
         self._raise_divergence("the features extractor's gradients")
 
     def _raise_divergence(self, what: str) -> None:
-        raise FloatingPointError(
-            f"{type(self).__name__} diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}; "
-            f"the weights are the last finite ones. Lower the learning rate (learning_rate={self.learning_rate}) or "
-            f"max_grad_norm ({self.max_grad_norm}), or rescale the rewards; also check that the env returns finite "
-            "rewards and observations."
+        remedy = (
+            f"Lower the learning rate (learning_rate={self.learning_rate}) or max_grad_norm ({self.max_grad_norm}), "
+            "or rescale the rewards"
         )
+        raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy, "the weights are the last finite ones")
 
     def learn(
         self: SelfHybridPPO,

@@ -2,7 +2,6 @@ from __future__ import annotations
 
 import io
 import pathlib
-from collections import deque
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -17,16 +16,20 @@ from stable_baselines3.common.utils import (
     FloatSchedule,
     LinearSchedule,
     polyak_update,
-    safe_mean,
     should_collect_more_steps,
     update_learning_rate,
 )
 from stable_baselines3.common.vec_env import VecEnv
 from torch.nn import functional as F
 
-from sb3_aac.common.array_env import array_path
-from sb3_aac.common.buffers import ParameterizedReplayBuffer
+from sb3_aac.common.action_stats import ActionStats
+from sb3_aac.common.array_env import array_path, step_as_vec_env
+from sb3_aac.common.divergence import divergence_error
+from sb3_aac.common.episode_stats import EpisodeStatsMixin
+from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
 from sb3_aac.common.model_files import check_policy_class
+from sb3_aac.common.observations import observation_batch
+from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer
 from sb3_aac.pdqn.noise import ParamNoise
 from sb3_aac.pdqn.policies import MlpPolicy, PDQNPolicy
 
@@ -45,7 +48,7 @@ def invert_gradients(grad: th.Tensor, params: th.Tensor) -> th.Tensor:
     return th.where(grad > 0, grad * (1.0 - params), grad * (params + 1.0)) / 2.0
 
 
-class PDQN(OffPolicyAlgorithm):
+class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
     """
     Parameterized Deep Q-Network (P-DQN) for parameterized actions: pick one of K action types and its parameters.
 
@@ -85,7 +88,7 @@ class PDQN(OffPolicyAlgorithm):
     :param gamma: The discount factor
     :param train_freq: Update the model every ``train_freq`` steps, or a tuple like ``(2, "episode")``
     :param gradient_steps: Gradient steps after each rollout (-1: as many as env steps in the rollout)
-    :param replay_buffer_kwargs: Keyword arguments of :class:`~sb3_aac.common.buffers.ParameterizedReplayBuffer`
+    :param replay_buffer_kwargs: Keyword arguments of :class:`~sb3_aac.pdqn.buffers.ParameterizedReplayBuffer`
     :param optimize_memory_usage: The replay buffer's memory-efficient variant (then pass
         ``replay_buffer_kwargs=dict(handle_timeout_termination=False)``)
     :param target_update_interval: Update the target networks every this many gradient steps
@@ -184,7 +187,7 @@ class PDQN(OffPolicyAlgorithm):
         self.param_noise_theta = param_noise_theta
         self.loss = loss
         self.max_grad_norm = max_grad_norm
-        self.info_keywords = tuple(info_keywords)
+        self._set_info_keywords(info_keywords)
         self.exploration_rate = exploration_initial_eps
         # Saved with the model, so that loading it with the other class fails instead of changing the Q network.
         self.q_network_passes = "multi" if self.multi_pass else "single"
@@ -235,6 +238,8 @@ class PDQN(OffPolicyAlgorithm):
                 **self.replay_buffer_kwargs,
             )
         self._convert_train_freq()
+        self._action_stats = ActionStats(self.policy.spec, value_name="q")
+        self._last_dump_timestep = self.num_timesteps
         self.exploration_schedule = LinearSchedule(
             self.exploration_initial_eps, self.exploration_final_eps, self.exploration_fraction
         )
@@ -254,7 +259,7 @@ class PDQN(OffPolicyAlgorithm):
 
     def _excluded_save_params(self) -> list[str]:
         # Per-run state rebuilt by _setup_model (the generator is re-seeded from `seed`).
-        return [*super()._excluded_save_params(), "_rng", "_noise", "_ep_keyword_buffers"]
+        return [*super()._excluded_save_params(), "_rng", "_noise", "_action_stats", "_last_dump_timestep"]
 
     def _get_torch_save_params(self) -> tuple[list[str], list[str]]:
         return ["policy", "policy.q_optimizer", "policy.actor_optimizer"], []
@@ -313,7 +318,7 @@ class PDQN(OffPolicyAlgorithm):
         """
         if deterministic:
             return self.policy.predict(observation, state, episode_start, deterministic=True)
-        obs, vectorized = self.policy.observation_batch(observation)
+        obs, vectorized = observation_batch(observation, self.observation_space)
         k, params = self._greedy_numpy(obs)
         return self.policy.spec.to_env_predicted(self._random_types(k, self.exploration_rate), params, vectorized), state
 
@@ -345,20 +350,20 @@ class PDQN(OffPolicyAlgorithm):
         callback.on_rollout_start()
         while should_collect_more_steps(train_freq, n_steps, n_episodes):
             k, params = self._sample_action(learning_starts, None, env.num_envs)
-            infos: list[dict[str, Any]] | None = None
-            actions = None  # the env actions (an object array of tuples) on the SB3 path, for callbacks
+            # Callbacks see the same locals on both paths (sb3_aac.common.array_env).
+            actions: Any
+            infos: list[dict[str, Any]]
             if arrays is not None:
-                step = arrays.step_arrays(k, spec.unscale(params))
-                new_obs, rewards, truncated = step.observations, step.rewards, step.truncated
-                dones = step.terminated | truncated
+                actions = (k, params)
+                new_obs, rewards, dones, infos = step_as_vec_env(arrays, k, spec.unscale(params))
             else:
                 actions = spec.to_env(k, params)
                 new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
-                truncated = np.array(
-                    [bool(d and i.get("TimeLimit.truncated", False)) for d, i in zip(dones, infos, strict=True)]
-                )
+            truncated = np.array([bool(d and i.get("TimeLimit.truncated", False)) for d, i in zip(dones, infos, strict=True)])
             self.num_timesteps += env.num_envs
             n_steps += 1
+            check_finite_step(new_obs, rewards, self.num_timesteps)
+            self._action_stats.add(k, params)
 
             callback.update_locals(locals())
             if not callback.on_step():
@@ -367,34 +372,26 @@ class PDQN(OffPolicyAlgorithm):
             next_obs = np.array(new_obs)  # an owned copy (a VecEnv may reuse its buffers)
             ended = np.flatnonzero(dones)
             for i in ended:
-                next_obs[i] = step.terminal_observations[i] if infos is None else infos[i]["terminal_observation"]
+                next_obs[i] = infos[i]["terminal_observation"]
             replay_buffer.add(self._last_obs, next_obs, k, params, rewards, dones, truncated)  # type: ignore[arg-type]
             self._last_obs = np.array(new_obs)
             self._update_current_progress_remaining(self.num_timesteps, self._total_timesteps)
             self._on_step()
             if len(ended):
                 n_episodes += len(ended)
-                self._on_episodes_end(ended, infos, step if infos is None else None, log_interval)
+                self._on_episodes_end(ended, infos, log_interval)
         callback.on_rollout_end()
         return RolloutReturn(n_steps * env.num_envs, n_episodes, continue_training=True)
 
-    def _on_episodes_end(
-        self, ended: np.ndarray, infos: list[dict[str, Any]] | None, step: Any, log_interval: int | None
-    ) -> None:
-        """Episode statistics of the envs in ``ended``, from the info dicts or from the array path's ``step``."""
+    def _on_episodes_end(self, ended: np.ndarray, infos: list[dict[str, Any]], log_interval: int | None) -> None:
+        """Episode statistics of the envs in ``ended``, from their info dicts."""
         for i in ended:
-            if infos is None:
-                self.ep_info_buffer.append({"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])})  # type: ignore[union-attr]
-                values = {key: step.episode_info[key][i] for key in self.info_keywords if key in step.episode_info}
-            else:
-                maybe_ep_info = infos[i].get("episode")
-                if maybe_ep_info is not None:
-                    self.ep_info_buffer.append(maybe_ep_info)  # type: ignore[union-attr]
-                if infos[i].get("is_success") is not None:
-                    self.ep_success_buffer.append(infos[i]["is_success"])  # type: ignore[union-attr]
-                values = {key: infos[i][key] for key in self.info_keywords if key in infos[i]}
-            for key, value in values.items():
-                self._ep_keyword_buffers[key].append(float(value))
+            maybe_ep_info = infos[i].get("episode")
+            if maybe_ep_info is not None:
+                self.ep_info_buffer.append(maybe_ep_info)  # type: ignore[union-attr]
+            if infos[i].get("is_success") is not None:
+                self.ep_success_buffer.append(infos[i]["is_success"])  # type: ignore[union-attr]
+            self._add_episode_keywords(infos[i])
             self._episode_num += 1
             if log_interval is not None and self._episode_num % log_interval == 0:
                 self.dump_logs()
@@ -413,7 +410,7 @@ class PDQN(OffPolicyAlgorithm):
         update_learning_rate(policy.q_optimizer, q_lr)
         update_learning_rate(policy.actor_optimizer, actor_lr)
         loss_fn, invert = LOSSES[self.loss], policy.param_bounding == "invert_gradients"
-        q_losses, actor_losses = [], []
+        q_losses, actor_losses, q_values = [], [], []
         for _ in range(gradient_steps):
             data = self.replay_buffer.sample(batch_size, self._rng)
             features, next_features = policy.features(data.observations), policy.features(data.next_observations)
@@ -451,6 +448,7 @@ class PDQN(OffPolicyAlgorithm):
                 polyak_update(policy.actor.parameters(), policy.actor_target.parameters(), self.actor_tau)
             q_losses.append(q_loss.detach())
             actor_losses.append(actor_loss.detach())
+            q_values.append(q.detach())
 
         q_loss_values, actor_loss_values = th.stack(q_losses).cpu().numpy(), th.stack(actor_losses).cpu().numpy()
         if not np.isfinite(q_loss_values).all():
@@ -462,42 +460,28 @@ class PDQN(OffPolicyAlgorithm):
         self.logger.record("train/actor_learning_rate", actor_lr)
         self.logger.record("train/critic_loss", float(q_loss_values.mean()))
         self.logger.record("train/actor_loss", float(actor_loss_values.mean()))
+        self._action_stats.add_values(th.cat(q_values).cpu().numpy())
 
     def _raise_divergence(self, what: str) -> None:
-        raise FloatingPointError(
-            f"{type(self).__name__} diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}. "
+        remedy = (
             f"Lower the learning rates (learning_rate={self.learning_rate}, actor_learning_rate={self.actor_learning_rate}) "
-            f"or max_grad_norm ({self.max_grad_norm}), or rescale the rewards; also check that the env returns finite "
-            "rewards and observations."
+            f"or max_grad_norm ({self.max_grad_norm}), or rescale the rewards"
         )
+        raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy)
 
     # ------------------------------------------------------------------ logging
 
-    def _reset_keyword_buffers(self) -> None:
-        """Windows of the ``info_keywords`` values of finished episodes (like ``ep_info_buffer``)."""
-        self._ep_keyword_buffers: dict[str, deque[float]] = {
-            key: deque(maxlen=self._stats_window_size) for key in self.info_keywords
-        }
-
-    def _setup_learn(
-        self,
-        total_timesteps: int,
-        callback: MaybeCallback = None,
-        reset_num_timesteps: bool = True,
-        tb_log_name: str = "run",
-        progress_bar: bool = False,
-    ) -> tuple[int, BaseCallback]:
-        if reset_num_timesteps:  # like ep_info_buffer in BaseAlgorithm._setup_learn
-            self._reset_keyword_buffers()
-        return super()._setup_learn(total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar)
-
     def dump_logs(self) -> None:
-        """Write log data: SB3's off-policy ``rollout/`` and ``time/`` keys, the info keywords and epsilon."""
-        for key, buffer in self._ep_keyword_buffers.items():
-            if buffer:
-                self.logger.record(f"rollout/ep_{key}_mean", safe_mean(list(buffer)))
+        """
+        Write log data: SB3's off-policy ``rollout/`` and ``time/`` keys, the info keywords, epsilon, and the
+        executed actions' type shares and per-type parameter statistics, and the Q values of the training batches
+        (:class:`~sb3_aac.common.action_stats.ActionStats`, value name ``q``) since the last dump.
+        """
+        self._record_keyword_means()
         self.logger.record("rollout/exploration_rate", self.exploration_rate)
+        self._action_stats.record(self.logger)
         super().dump_logs()
+        self._last_dump_timestep = self.num_timesteps
 
     def learn(
         self: SelfPDQN,
@@ -508,7 +492,8 @@ class PDQN(OffPolicyAlgorithm):
         reset_num_timesteps: bool = True,
         progress_bar: bool = False,
     ) -> SelfPDQN:
-        return super().learn(
+        """SB3's off-policy ``learn``, with a last log dump at the end (of what was logged since the previous one)."""
+        super().learn(
             total_timesteps=total_timesteps,
             callback=callback,
             log_interval=log_interval,  # type: ignore[arg-type]
@@ -516,6 +501,9 @@ class PDQN(OffPolicyAlgorithm):
             reset_num_timesteps=reset_num_timesteps,
             progress_bar=progress_bar,
         )
+        if log_interval is not None and self.num_timesteps > self._last_dump_timestep:
+            self.dump_logs()
+        return self
 
     # ------------------------------------------------------------------ persistence
 

@@ -10,6 +10,8 @@ from stable_baselines3.common.torch_layers import create_mlp
 from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
 from torch import nn
 
+from sb3_aac.common.observations import observation_batch
+from sb3_aac.common.sizes import check_layer_sizes
 from sb3_aac.common.spaces import ParameterizedActionSpec
 
 PARAM_BOUNDINGS = ("invert_gradients", "tanh")
@@ -153,8 +155,8 @@ class PDQNPolicy(BasePolicy):
             raise ValueError(f"Unknown param_bounding {param_bounding!r}, valid values: {list(PARAM_BOUNDINGS)}")
         super().__init__(observation_space, action_space, optimizer_class=optimizer_class, optimizer_kwargs=optimizer_kwargs)
         self.spec = ParameterizedActionSpec.from_space(action_space)
-        self.net_arch = [128] if net_arch is None else list(net_arch)
-        self.actor_net_arch = self.net_arch if actor_net_arch is None else list(actor_net_arch)
+        self.net_arch = [128] if net_arch is None else check_layer_sizes("net_arch", net_arch)
+        self.actor_net_arch = self.net_arch if actor_net_arch is None else check_layer_sizes("actor_net_arch", actor_net_arch)
         self.activation_fn, self.multi_pass, self.param_bounding = activation_fn, multi_pass, param_bounding
         self.initial_params = initial_params
         self.actor_lr_schedule = lr_schedule if actor_lr_schedule is None else actor_lr_schedule
@@ -227,20 +229,6 @@ class PDQNPolicy(BasePolicy):
     def _predict(self, observation: PyTorchObs, deterministic: bool = True) -> th.Tensor:
         raise NotImplementedError("A parameterized action is not one tensor: use predict()")
 
-    def observation_batch(self, observation: np.ndarray) -> tuple[np.ndarray, bool]:
-        """``observation`` as a batch ``(n, *obs_shape)``, and whether it was a batch already."""
-        obs = np.asarray(observation)
-        shape = self.observation_space.shape
-        assert shape is not None  # a Box
-        if obs.shape == shape:
-            return obs.reshape(1, *shape), False
-        if obs.shape[1:] == shape:
-            return obs, True
-        raise ValueError(
-            f"Error: Unexpected observation shape {obs.shape} for Box environment, "
-            f"please use {shape} or (n_env, {', '.join(map(str, shape))}) for the observation shape."
-        )
-
     def predict(  # type: ignore[override]
         self,
         observation: np.ndarray,
@@ -256,7 +244,7 @@ class PDQNPolicy(BasePolicy):
             shape ``(n,)`` holding one per observation for a batch; and ``state`` unchanged
         """
         self.set_training_mode(False)
-        obs, vectorized = self.observation_batch(observation)
+        obs, vectorized = observation_batch(observation, self.observation_space)
         with th.no_grad():
             _, params, k = self.greedy(self.features(th.as_tensor(obs, device=self.device)))
         return self.spec.to_env_predicted(k.cpu().numpy(), params.cpu().numpy(), vectorized), state

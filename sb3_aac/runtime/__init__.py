@@ -21,40 +21,7 @@ and imported there as ``runtime``. One module per job:
 - :mod:`~sb3_aac.runtime.policy`: :class:`RuntimePolicy`.
 """
 
-# The public names, and every name code imported from the single module this package replaced (runtime.py).
-from .actions import LAYOUTS, env_action, unscale
-from .format import (
-    ALIGNMENT,
-    ARRAY_DTYPE,
-    FORMAT_NAME,
-    FORMAT_VERSION,
-    MAGIC,
-    PREAMBLE,
-    TILE_ARRAYS,
-    expected_array_shapes,
-    policy_file_path,
-    read_policy_file,
-)
-from .forward import WINDOW_MIN_ROWS, BankForward, TileForward, check_rbf_window
+from .format import FORMAT_NAME, FORMAT_VERSION, read_policy_file
 from .policy import RuntimePolicy
 
-__all__ = [
-    "ALIGNMENT",
-    "ARRAY_DTYPE",
-    "FORMAT_NAME",
-    "FORMAT_VERSION",
-    "LAYOUTS",
-    "MAGIC",
-    "PREAMBLE",
-    "TILE_ARRAYS",
-    "WINDOW_MIN_ROWS",
-    "BankForward",
-    "RuntimePolicy",
-    "TileForward",
-    "check_rbf_window",
-    "env_action",
-    "expected_array_shapes",
-    "policy_file_path",
-    "read_policy_file",
-    "unscale",
-]
+__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "RuntimePolicy", "read_policy_file"]

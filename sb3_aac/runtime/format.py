@@ -23,8 +23,7 @@ from .actions import LAYOUTS
 from .forward import check_rbf_window
 
 FORMAT_NAME = "sb3-aac-policy"
-FORMAT_VERSION = 2  # 2: RBF features may name a window (features.rbf_window)
-SUPPORTED_VERSIONS = (1, 2)
+FORMAT_VERSION = 2  # the only version this reader reads (docs/export-format.md, "Versioning")
 MAGIC = b"SB3AACP\x00"  # 8 bytes
 PREAMBLE = struct.Struct("<8sQ")  # magic, header length (bytes)
 DIGEST_SIZE = 32  # the file ends with the SHA-256 of everything before it
@@ -44,7 +43,7 @@ TILE_ARRAYS = (
 
 
 def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
-    """The arrays a version-1 or -2 file must hold, with their shapes, given its (checked) header."""
+    """The arrays a file must hold, with their shapes, given its (checked) header."""
     d = header["observation"]["size"]
     n_params = header["action"]["n_params"]
     approx = header["approximators"]
@@ -135,8 +134,8 @@ def _check_features_and_head(features: Any, head: Any, d: int, path: Any) -> Non
     if features["type"] == "rbf":
         if not _positive_int(features["n_rbf"]) or features["n_features"] != d * features["n_rbf"]:
             raise _fail(path, f"RBF features: n_rbf={features['n_rbf']!r}, n_features={features['n_features']!r}, {d} inputs")
-        try:  # version 1 has no window: dense
-            check_rbf_window(features.get("rbf_window"))
+        try:
+            check_rbf_window(features["rbf_window"])  # None: dense
         except ValueError as error:
             raise _fail(path, str(error)) from None
     elif features["type"] == "scaled":
@@ -157,7 +156,7 @@ def _check_features_and_head(features: Any, head: Any, d: int, path: Any) -> Non
 
 
 def _check_header(header: Any, path: Any) -> None:
-    """Structure and consistency of a version-1 or -2 header (everything but the arrays)."""
+    """Structure and consistency of a header (everything but the arrays)."""
     try:
         obs, action, approx = header["observation"], header["action"], header["approximators"]
         d, shape = obs["size"], obs["shape"]
@@ -247,10 +246,10 @@ def _parse_header(text: bytes, path: Any) -> dict[str, Any]:
         found = header.get("format") if isinstance(header, dict) else None
         raise _fail(path, f"format is {found!r}, expected {FORMAT_NAME!r}")
     version = header.get("version")
-    if version not in SUPPORTED_VERSIONS:
+    if version != FORMAT_VERSION:
         raise _fail(
             path,
-            f"unknown format version {version!r}; this reader supports {list(SUPPORTED_VERSIONS)} "
+            f"unknown format version {version!r}; this reader supports version {FORMAT_VERSION} "
             "(a newer sb3-aac wrote it? upgrade sb3-aac, or export with this version)",
         )
     _check_header(header, path)
@@ -321,7 +320,7 @@ def _array_placements(header: dict[str, Any], path: Any) -> dict[str, tuple[int,
         except (KeyError, TypeError) as error:
             raise _fail(path, f"array {name!r}: malformed entry {entry!r}") from error
         if dtype != ARRAY_DTYPE:
-            raise _fail(path, f"array {name!r} has dtype {dtype!r}, versions 1 and 2 store every array as {ARRAY_DTYPE!r}")
+            raise _fail(path, f"array {name!r} has dtype {dtype!r}, the format stores every array as {ARRAY_DTYPE!r}")
         if not (isinstance(stored_shape, list) and all(_count(s) for s in stored_shape)) or tuple(stored_shape) != shape:
             raise _fail(path, f"array {name!r} has shape {stored_shape!r}, the header's sizes need {shape}")
         size = 8 * math.prod(shape)

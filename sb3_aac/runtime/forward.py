@@ -1,7 +1,7 @@
 """
 The approximators' forward pass, numpy only: :class:`BankForward` (scaled-input or RBF features, linear or one-tanh
 -layer heads) and :class:`TileForward` (tile coding). Training subclasses them
-(:class:`sb3_aac.common.approximators.BankKernel`, :class:`sb3_aac.common.tile_coding.TileKernel`), and
+(:class:`sb3_aac.sarsa_aac.approximators.BankKernel`, :class:`sb3_aac.sarsa_aac.tile_coding.TileKernel`), and
 ``model.predict`` and :class:`~sb3_aac.runtime.policy.RuntimePolicy` call them, so an exported policy decides
 with the very code training ran.
 """
@@ -33,8 +33,8 @@ def check_rbf_window(rbf_window: Any) -> None:
 class BankForward:
     """
     The forward pass of a bank of ``A`` independent function approximators of one observation: the only
-    implementation of these formulas (see :mod:`sb3_aac.common.approximators` for the model). Training subclasses
-    it (:class:`~sb3_aac.common.approximators.BankKernel`), ``model.predict`` and :class:`RuntimePolicy` call it.
+    implementation of these formulas (see :mod:`sb3_aac.sarsa_aac.approximators` for the model). Training subclasses
+    it (:class:`~sb3_aac.sarsa_aac.approximators.BankKernel`), ``model.predict`` and :class:`RuntimePolicy` call it.
 
     - features ``phi`` (``F``): the inputs scaled from ``[low, high]`` to ``[-1, 1]``, ``(s - mid) / half``; or per
       input ``m`` Gaussian RBFs on the scaled input, ``exp(-0.5 * ((s~_i - c_ij) / w_ij)**2)``. Both are computed
@@ -52,7 +52,7 @@ class BankForward:
     operations in every implementation), and sets every other feature to exactly 0. Each dropped feature is below
     ``exp(-r**2 / 2)`` (r = 5: 3.7e-6), so an output differs from the dense one by less than ``exp(-r**2 / 2)`` times
     the sum of the absolute weights on the dropped features (before the tanh for an MLP head, which does not enlarge
-    it). Where every input's centres are evenly spaced with equal widths (:func:`~sb3_aac.common.approximators.rbf_layout`),
+    it). Where every input's centres are evenly spaced with equal widths (:func:`~sb3_aac.sarsa_aac.approximators.rbf_layout`),
     batches of ``WINDOW_MIN_ROWS`` or more evaluate only a window of ``window_size`` centres per input (where that
     is at most half of them).
     """
@@ -176,7 +176,7 @@ class BankForward:
 class TileForward:
     """
     The forward pass of a bank of ``A`` linear approximators on tile-coding features: the only implementation
-    of these formulas (training subclasses it, :class:`sb3_aac.common.tile_coding.TileKernel`).
+    of these formulas (training subclasses it, :class:`sb3_aac.sarsa_aac.tile_coding.TileKernel`).
 
     ``C`` codings (one per group of inputs and tiling) each activate exactly one binary feature. Coding ``c``
     reads the inputs ``tile_inputs[c]`` (``k`` per coding; a padded slot has stride 0), scales each to

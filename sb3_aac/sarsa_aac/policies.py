@@ -1,5 +1,12 @@
+"""
+SarsaAAC's policies: the abstract :class:`SarsaAACPolicy` (spaces, output layout, greedy ``predict``), the policies
+on a numpy bank of approximators (:class:`NumpyBankPolicy`): the dense banks of the paper (:class:`DenseBankPolicy`
+and its presets :class:`MlpPolicy`, :class:`RbfMlpPolicy`, :class:`RbfPolicy`) and tile coding (:class:`TilePolicy`).
+"""
+
 from __future__ import annotations
 
+from abc import abstractmethod
 from typing import Any
 
 import numpy as np
@@ -8,88 +15,52 @@ from gymnasium import spaces
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import PyTorchObs
 
-from sb3_aac.common.approximators import DEFAULT_RBF_WINDOW, ApproximatorBank, BankCache, BankKernel
-from sb3_aac.common.tile_coding import TileBank, TileCache, TileKernel
+from sb3_aac.common.observations import observation_batch
 from sb3_aac.common.spaces import ParameterizedActionSpec
+from sb3_aac.sarsa_aac.approximators import DEFAULT_RBF_WINDOW, ApproximatorBank, NumpyBank
+from sb3_aac.sarsa_aac.kernels import Kernel
+from sb3_aac.sarsa_aac.tile_coding import TileBank
 
 
 class SarsaAACPolicy(BasePolicy):
     """
-    Policy of SARSA Actor-Actor-Critic: the action-type actor, the parameter actor and the critic.
-
-    All ``A = K + n_params + 1`` outputs are independent function approximators (Uc-Cetina 2013, Fig. 3) kept in
-    one :class:`~sb3_aac.common.approximators.ApproximatorBank`, column by column:
-    ``Q_0..Q_{K-1}`` (action-type actor), then one approximator per scalar parameter in the order of
-    :class:`~sb3_aac.common.spaces.ParameterizedActionSpec` (parameter actor, outputs in the scaled ``[-1, 1]``
-    space), then ``V`` (critic).
+    Policy of SARSA Actor-Actor-Critic: the action-type actor, the parameter actor and the critic, as
+    ``A = K + n_params + 1`` outputs of one observation (Uc-Cetina 2013, Fig. 3), column by column:
+    ``Q_0..Q_{K-1}`` (action-type actor, :attr:`q_slice`), then one output per scalar parameter in the order of
+    :class:`~sb3_aac.common.spaces.ParameterizedActionSpec` (parameter actor, in the scaled ``[-1, 1]`` space,
+    :attr:`param_slice`), then ``V`` (critic, :attr:`value_index`).
 
     ``predict`` is greedy: the type with the greatest Q, and that type's parameter outputs clipped to the bounds.
     Exploration belongs to the algorithm (see :meth:`SarsaAAC.predict <sb3_aac.SarsaAAC.predict>`).
 
+    This class builds no approximators. A family of approximators is one subclass that builds them in its
+    ``__init__`` (after calling this one's, which sets the spaces and the layout; :meth:`input_bounds` gives the
+    bounds to scale the inputs with) and implements the abstract methods below, which are the whole contract
+    SarsaAAC and ``predict`` rely on, and ``_get_constructor_parameters`` (its own arguments, for save/load).
+
     :param observation_space: A ``Box`` observation space (any shape; it is flattened)
     :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
-    :param hidden_units: Hidden tanh units of each approximator, or ``None`` for linear approximators
-    :param n_rbf: Gaussian RBFs per observation input, or ``None`` to feed the scaled inputs directly
-    :param rbf_width: RBF standard deviation in units of the spacing between centres (chosen by us: 1.0,
-        the paper gives no value)
-    :param obs_bounds: ``(low, high)`` used to scale the inputs to ``[-1, 1]`` and to place the RBF centres
-        evenly; defaults to the observation space's bounds. Without RBFs, inputs with infinite bounds are
-        passed through unscaled.
-    :param rbf_window: Only the Gaussians within this many standard deviations of each input are computed, the
-        others are exactly 0, in training, ``predict`` and the exported runtime alike (see
-        :class:`~sb3_aac.runtime.forward.BankForward`); ``None`` computes all. The default 5 drops features below
-        ``exp(-12.5) = 3.7e-6``, so outputs differ from dense evaluation by less than ``3.7e-6`` times the sum of
-        the absolute weights on the dropped features; at 50 RBFs per input it evaluates 13 of them per input.
+    :param obs_bounds: ``(low, high)`` of the (flattened) observation for the family's input scaling; defaults to the
+        observation space's bounds
     """
 
     def __init__(
         self,
         observation_space: spaces.Space[Any],
         action_space: spaces.Space[Any],
-        hidden_units: int | None = 10,
-        n_rbf: int | None = None,
-        rbf_width: float = 1.0,
         obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
-        rbf_window: float | None = DEFAULT_RBF_WINDOW,
     ):
-        low, high = self._init_spaces(observation_space, action_space, obs_bounds)
-        self.hidden_units, self.n_rbf, self.rbf_width, self.rbf_window = hidden_units, n_rbf, rbf_width, rbf_window
-        if n_rbf is not None and not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
-            raise ValueError(
-                f"The observation space {observation_space} has infinite bounds, so RBF centres cannot be placed: "
-                "pass policy_kwargs=dict(obs_bounds=(low, high)) with finite bounds, or use MlpPolicy"
-            )
-        self._init_bank(
-            ApproximatorBank(
-                low, high, self.n_outputs, n_rbf=n_rbf, rbf_width=rbf_width, hidden_units=hidden_units, rbf_window=rbf_window
-            )
-        )
-
-    def _init_spaces(
-        self,
-        observation_space: spaces.Space[Any],
-        action_space: spaces.Space[Any],
-        obs_bounds: tuple[np.ndarray, np.ndarray] | None,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Check the spaces, initialise the module, parse the action space; return the ``(D,)`` input bounds."""
         if not isinstance(observation_space, spaces.Box):
             raise ValueError(
                 f"Unsupported observation space {observation_space}: SarsaAAC policies take a Box observation "
                 "(flatten Dict/Tuple observations first, e.g. with gymnasium.wrappers.FlattenObservation)"
             )
-        BasePolicy.__init__(self, observation_space, action_space)
+        super().__init__(observation_space, action_space)
         self.spec = ParameterizedActionSpec.from_space(action_space)
         self.n_types, self.n_params = self.spec.n_types, self.spec.n_params
         self.n_outputs = self.n_types + self.n_params + 1
         self.obs_bounds = obs_bounds
-        low, high = (observation_space.low, observation_space.high) if obs_bounds is None else obs_bounds
-        n_inputs = int(np.prod(observation_space.shape))
-        return tuple(np.broadcast_to(np.asarray(b, dtype=np.float64).ravel(), (n_inputs,)) for b in (low, high))  # type: ignore[return-value]
-
-    def _init_bank(self, bank: ApproximatorBank | TileBank) -> None:
-        """Adopt ``bank`` (``n_outputs`` approximators) and lay out its output columns."""
-        self.approximators = bank
-        # Column layout of the bank's outputs.
+        # Column layout of the outputs.
         self.q_slice = slice(0, self.n_types)
         self.param_slice = slice(self.n_types, self.n_types + self.n_params)
         self.value_index = self.n_types + self.n_params
@@ -97,65 +68,59 @@ class SarsaAACPolicy(BasePolicy):
         owns = (self.spec.param_type == np.arange(self.n_types)[:, None]).astype(np.float64)
         self.param_table = np.stack([np.zeros_like(owns), owns])
 
-    def _get_constructor_parameters(self) -> dict[str, Any]:
-        # Not super()'s: it adds normalize_images, which these policies do not take.
-        return dict(
-            observation_space=self.observation_space,
-            action_space=self.action_space,
-            hidden_units=self.hidden_units,
-            n_rbf=self.n_rbf,
-            rbf_width=self.rbf_width,
-            obs_bounds=self.obs_bounds,
-            rbf_window=self.rbf_window,
+    def input_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(low, high)``, each ``(D,)`` float64: ``obs_bounds`` if given, else the observation space's bounds."""
+        box = self.observation_space
+        assert isinstance(box, spaces.Box)  # checked in __init__
+        low, high = (box.low, box.high) if self.obs_bounds is None else self.obs_bounds
+        n_inputs = int(np.prod(box.shape))
+        return (
+            np.broadcast_to(np.asarray(low, dtype=np.float64).ravel(), (n_inputs,)),
+            np.broadcast_to(np.asarray(high, dtype=np.float64).ravel(), (n_inputs,)),
         )
 
-    def kernel(self) -> BankKernel | TileKernel:
-        """The numpy kernel on the current parameter storage (CPU only); cached by the bank."""
-        return self.approximators.numpy_kernel()
+    # ------------------------------------------------------------------ the contract of a family
 
-    def rebind(self) -> BankKernel | TileKernel:
-        """Rebuild the numpy views, e.g. after assigning ``param.data`` directly."""
-        self.approximators.invalidate_kernel()
-        return self.approximators.numpy_kernel()
+    @abstractmethod
+    def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, Any]:
+        """
+        The outputs ``(n, A)`` (float64, column layout in the class docstring) of a float64 batch
+        ``(n, *obs_shape)`` on the current weights, computed with numpy, wherever the weights are stored; and what
+        the training kernel's update would need (the same as ``kernel().forward``'s cache on CPU storage).
+        """
+
+    @abstractmethod
+    def kernel(self) -> Kernel[Any]:
+        """The training kernel (:class:`~sb3_aac.sarsa_aac.kernels.Kernel`) on the current weights; CPU storage."""
+
+    @abstractmethod
+    def rebind(self) -> Kernel[Any]:
+        """
+        :meth:`kernel` built afresh: SarsaAAC calls it when ``learn`` starts, after the weights may have been moved,
+        loaded or assigned (``param.data = ...``), and trains with the kernel it returns.
+        """
+
+    @abstractmethod
+    def scale_outputs(self, columns: list[int], factor: float) -> None:
+        """Multiply the outputs of ``columns`` by ``factor`` for every observation (in place, on the weights)."""
+
+    @abstractmethod
+    def finite_outputs(self) -> np.ndarray:
+        """``(A,)`` bool: for each output, whether every weight it depends on is finite."""
+
+    # ------------------------------------------------------------------ built on the contract
 
     def scale_value_outputs(self, factor: float) -> None:
         """Multiply the outputs of the action-type actor and the critic (not the parameter actor's) by ``factor``."""
-        self.approximators.scale_outputs([*range(self.n_types), self.value_index], factor)
+        self.scale_outputs([*range(self.n_types), self.value_index], factor)
 
     def forward(self, obs: PyTorchObs) -> th.Tensor:
-        """All approximator outputs ``(n, A)`` as a tensor (column layout in the class docstring), computed by numpy."""
+        """All outputs ``(n, A)`` as a float64 tensor on ``obs``'s device (column layout in the class docstring)."""
         assert isinstance(obs, th.Tensor)
-        outputs: th.Tensor = self.approximators(obs.reshape(len(obs), -1))
-        return outputs
+        return th.as_tensor(self.evaluate(obs.detach().cpu().numpy())[0], device=obs.device)
 
     def _predict(self, observation: PyTorchObs, deterministic: bool = True) -> th.Tensor:
         raise NotImplementedError("A parameterized action is not one tensor: use predict()")
-
-    def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, BankCache | TileCache]:
-        """Numpy forward pass on a batch ``(n, *obs_shape)``: outputs ``(n, A)`` and the update cache."""
-        obs = obs.reshape(len(obs), -1)
-        if self.approximators.obs_mid.device.type == "cpu":
-            return self.kernel().forward(obs)
-        return self.approximators.evaluate(obs), BankCache(np.empty((len(obs), 0)), None)
-
-    def observation_batch(self, observation: np.ndarray) -> tuple[np.ndarray, bool]:
-        """
-        ``observation`` as a float64 batch ``(n, *obs_shape)``, and whether it was a batch already.
-
-        :raises ValueError: for a wrong shape, or NaN or inf values
-        """
-        obs = np.asarray(observation, dtype=np.float64)
-        shape = self.observation_space.shape
-        if shape is None:
-            raise ValueError(f"The observation space {self.observation_space} has no shape; SarsaAAC needs a Box")
-        if obs.shape == shape or obs.shape[1:] == shape:
-            if not np.isfinite(obs).all():
-                raise ValueError(f"The observation holds NaN or inf values: {observation}")
-            return (obs.reshape(1, *shape), False) if obs.shape == shape else (obs, True)
-        raise ValueError(
-            f"Error: Unexpected observation shape {obs.shape} for Box environment, "
-            f"please use {shape} or (n_env, {', '.join(map(str, shape))}) for the observation shape."
-        )
 
     def actions_from_outputs(
         self, out: np.ndarray, k: np.ndarray | None = None, params: np.ndarray | None = None, vectorized: bool = True
@@ -180,34 +145,118 @@ class SarsaAACPolicy(BasePolicy):
 
         :return: one env action (a tuple ``env.step`` accepts) for a single observation, or an object ndarray of
             shape ``(n,)`` holding one per observation for a batch; and ``state`` unchanged
+        :raises ValueError: for an observation of the wrong shape, or with NaN or inf values
         """
-        obs, vectorized = self.observation_batch(observation)
+        obs, vectorized = observation_batch(observation, self.observation_space)
         out, _ = self.evaluate(obs)
         return self.actions_from_outputs(out, vectorized=vectorized), state
 
 
-_PRESET_PARAMS = """
-    :param observation_space: A ``Box`` observation space (see :class:`SarsaAACPolicy`)
+class NumpyBankPolicy(SarsaAACPolicy):
+    """
+    A :class:`SarsaAACPolicy` whose ``A`` outputs are the independent approximators of one numpy bank,
+    :attr:`approximators` (a :class:`~sb3_aac.sarsa_aac.approximators.NumpyBank`: torch tensors for save/load, numpy
+    on zero-copy views for everything else). Subclasses build the bank and pass it to :meth:`_set_approximators`.
+    """
+
+    approximators: NumpyBank
+
+    def _set_approximators(self, bank: NumpyBank) -> None:
+        """Adopt ``bank``, which holds :attr:`n_outputs` approximators (one per output column)."""
+        self.approximators = bank
+
+    def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, Any]:
+        """See :meth:`SarsaAACPolicy.evaluate`; for weights stored off the CPU the cache is None."""
+        obs = obs.reshape(len(obs), -1)
+        if self.approximators.obs_mid.device.type == "cpu":
+            return self.kernel().forward(obs)
+        return self.approximators.evaluate(obs), None
+
+    def kernel(self) -> Kernel[Any]:
+        """The bank's numpy kernel on the current parameter storage (CPU only); cached by the bank."""
+        return self.approximators.numpy_kernel()
+
+    def rebind(self) -> Kernel[Any]:
+        """Rebuild the numpy views, e.g. after assigning ``param.data`` directly."""
+        self.approximators.invalidate_kernel()
+        return self.approximators.numpy_kernel()
+
+    def scale_outputs(self, columns: list[int], factor: float) -> None:
+        self.approximators.scale_outputs(columns, factor)
+
+    def finite_outputs(self) -> np.ndarray:
+        return self.approximators.finite_outputs()
+
+
+class DenseBankPolicy(NumpyBankPolicy):
+    """
+    The function approximators of Uc-Cetina (2013, Sec. 4.2) in one
+    :class:`~sb3_aac.sarsa_aac.approximators.ApproximatorBank`: scaled inputs or Gaussian RBFs per input, then a
+    linear or one-hidden-layer tanh head per approximator. :class:`MlpPolicy`, :class:`RbfMlpPolicy` and
+    :class:`RbfPolicy` are its presets (the paper's three families; only their defaults differ).
+
+    :param observation_space: A ``Box`` observation space (any shape; it is flattened)
     :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
     :param hidden_units: Hidden tanh units of each approximator, or ``None`` for linear approximators
     :param n_rbf: Gaussian RBFs per observation input, or ``None`` to feed the scaled inputs directly
-    :param rbf_width: RBF standard deviation in units of the centre spacing (1.0, chosen by us)
-    :param obs_bounds: ``(low, high)`` for input scaling and RBF placement; defaults to the observation space's
-        bounds
-    :param rbf_window: RBFs computed per input, in standard deviations around it (``None``: all; see
-        :class:`SarsaAACPolicy`)
-"""
+    :param rbf_width: RBF standard deviation in units of the spacing between centres (chosen by us: 1.0,
+        the paper gives no value)
+    :param obs_bounds: ``(low, high)`` used to scale the inputs to ``[-1, 1]`` and to place the RBF centres
+        evenly; defaults to the observation space's bounds. Without RBFs, inputs with infinite bounds are
+        passed through unscaled.
+    :param rbf_window: Only the Gaussians within this many standard deviations of each input are computed, the
+        others are exactly 0, in training, ``predict`` and the exported runtime alike (see
+        :class:`~sb3_aac.runtime.forward.BankForward`); ``None`` computes all. The default 5 drops features below
+        ``exp(-12.5) = 3.7e-6``, so outputs differ from dense evaluation by less than ``3.7e-6`` times the sum of
+        the absolute weights on the dropped features; at 50 RBFs per input it evaluates 13 of them per input.
+    """
+
+    approximators: ApproximatorBank
+
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
+        hidden_units: int | None = 10,
+        n_rbf: int | None = None,
+        rbf_width: float = 1.0,
+        obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
+        rbf_window: float | None = DEFAULT_RBF_WINDOW,
+    ):
+        super().__init__(observation_space, action_space, obs_bounds)
+        low, high = self.input_bounds()
+        self.hidden_units, self.n_rbf, self.rbf_width, self.rbf_window = hidden_units, n_rbf, rbf_width, rbf_window
+        if n_rbf is not None and not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
+            raise ValueError(
+                f"The observation space {observation_space} has infinite bounds, so RBF centres cannot be placed: "
+                "pass policy_kwargs=dict(obs_bounds=(low, high)) with finite bounds, or use MlpPolicy"
+            )
+        self._set_approximators(
+            ApproximatorBank(
+                low, high, self.n_outputs, n_rbf=n_rbf, rbf_width=rbf_width, hidden_units=hidden_units, rbf_window=rbf_window
+            )
+        )
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        # Not super()'s: it adds normalize_images, which these policies do not take.
+        return dict(
+            observation_space=self.observation_space,
+            action_space=self.action_space,
+            hidden_units=self.hidden_units,
+            n_rbf=self.n_rbf,
+            rbf_width=self.rbf_width,
+            obs_bounds=self.obs_bounds,
+            rbf_window=self.rbf_window,
+        )
 
 
-class MlpPolicy(SarsaAACPolicy):
-    __doc__ = (
-        """
+class MlpPolicy(DenseBankPolicy):
+    """
     Multilayer perceptrons (Uc-Cetina 2013, Fig. 5): each approximator has one hidden tanh layer over the scaled
     observation. The paper tried 2, 10 and 20 hidden units (2 was the most reliable on dribbling); the default 10
-    is ours. Observation inputs with infinite bounds are fed unscaled unless ``obs_bounds`` is given.
-"""
-        + _PRESET_PARAMS
-    )
+    is ours. Observation inputs with infinite bounds are fed unscaled unless ``obs_bounds`` is given. The arguments
+    are :class:`DenseBankPolicy`'s.
+    """
 
     def __init__(
         self,
@@ -222,15 +271,12 @@ class MlpPolicy(SarsaAACPolicy):
         super().__init__(observation_space, action_space, hidden_units, n_rbf, rbf_width, obs_bounds, rbf_window)
 
 
-class RbfMlpPolicy(SarsaAACPolicy):
-    __doc__ = (
-        """
+class RbfMlpPolicy(DenseBankPolicy):
+    """
     Multilayer perceptrons behind a Gaussian RBF filter layer (Uc-Cetina 2013, Fig. 6): each input feeds
     ``n_rbf`` Gaussians (10 in the paper, the default) and those feed one hidden tanh layer (2, 10 or 20 units in
-    the paper; the default 10 is ours).
-"""
-        + _PRESET_PARAMS
-    )
+    the paper; the default 10 is ours). The arguments are :class:`DenseBankPolicy`'s.
+    """
 
     def __init__(
         self,
@@ -245,15 +291,12 @@ class RbfMlpPolicy(SarsaAACPolicy):
         super().__init__(observation_space, action_space, hidden_units, n_rbf, rbf_width, obs_bounds, rbf_window)
 
 
-class RbfPolicy(SarsaAACPolicy):
-    __doc__ = (
-        """
+class RbfPolicy(DenseBankPolicy):
+    """
     Arrays of Gaussian RBFs with a linear output (Uc-Cetina 2013, Fig. 7), the paper's best family: one array
     of ``n_rbf`` Gaussians per input (10, 30 or 50 in the paper; default 10) and a linear approximator on top
-    (``hidden_units=None``).
-"""
-        + _PRESET_PARAMS
-    )
+    (``hidden_units=None``). The arguments are :class:`DenseBankPolicy`'s.
+    """
 
     def __init__(
         self,
@@ -268,12 +311,13 @@ class RbfPolicy(SarsaAACPolicy):
         super().__init__(observation_space, action_space, hidden_units, n_rbf, rbf_width, obs_bounds, rbf_window)
 
 
-class TilePolicy(SarsaAACPolicy):
+class TilePolicy(NumpyBankPolicy):
     """
-    Tile coding over groups of inputs with a linear output (:mod:`sb3_aac.common.tile_coding`; not in the paper):
+    Tile coding over groups of inputs with a linear output (:mod:`sb3_aac.sarsa_aac.tile_coding`; not in the paper):
     features that combine inputs, so values such as "heading relative to the target direction" are representable,
     still closed-form and sparse (training and decisions cost ``O(n_groups * n_tilings)`` per approximator).
-    The default groups, every input and every pair of inputs, need no knowledge of the inputs.
+    The default groups, every input and every pair of inputs, need no knowledge of the inputs. The only policy that
+    learns with eligibility traces (SarsaAAC's ``trace_lambda > 0``).
 
     :param observation_space: A ``Box`` observation space with finite bounds (or give ``obs_bounds``)
     :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
@@ -284,6 +328,8 @@ class TilePolicy(SarsaAACPolicy):
     :param obs_bounds: ``(low, high)`` where the grids start and end; defaults to the observation space's bounds
     """
 
+    approximators: TileBank
+
     def __init__(
         self,
         observation_space: spaces.Space[Any],
@@ -293,16 +339,15 @@ class TilePolicy(SarsaAACPolicy):
         n_tilings: int = 8,
         obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
     ):
-        # Not SarsaAACPolicy.__init__: that one builds a dense bank.
-        low, high = self._init_spaces(observation_space, action_space, obs_bounds)
+        super().__init__(observation_space, action_space, obs_bounds)
+        low, high = self.input_bounds()
         if not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
             raise ValueError(
                 f"The observation space {observation_space} has infinite bounds, so tiles cannot be placed: "
                 "pass policy_kwargs=dict(obs_bounds=(low, high)) with finite bounds"
             )
-        self.hidden_units, self.n_rbf = None, None
         self.tile_groups, self.tiles_per_input, self.n_tilings = tile_groups, tiles_per_input, n_tilings
-        self._init_bank(TileBank(low, high, self.n_outputs, tile_groups, tiles_per_input, n_tilings))
+        self._set_approximators(TileBank(low, high, self.n_outputs, tile_groups, tiles_per_input, n_tilings))
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
         return dict(

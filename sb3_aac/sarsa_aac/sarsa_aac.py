@@ -4,26 +4,26 @@ import math
 import sys
 import time
 import zipfile
-from collections import deque
-from collections.abc import Mapping
-from types import MappingProxyType
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 import torch as th
-from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
 
-from sb3_aac.common.array_env import array_path
+from sb3_aac.common.action_stats import ActionStats
+from sb3_aac.common.array_env import array_path, step_as_vec_env
+from sb3_aac.common.divergence import divergence_error
+from sb3_aac.common.episode_stats import EpisodeStatsMixin
+from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
 from sb3_aac.common.model_files import check_model_file, check_policy_class
-from sb3_aac.common.tile_coding import TileBank, TileKernel, TileTraces
+from sb3_aac.common.observations import observation_batch
+from sb3_aac.sarsa_aac.kernels import Kernel
+from sb3_aac.sarsa_aac.tile_coding import TileKernel, TileTraces
 from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
-# The info of a lane whose episode goes on, on the array path (read-only, shared by those lanes).
-_NO_INFO: Mapping[str, Any] = MappingProxyType({})
 
 TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
 # Schedules are re-evaluated whenever training progress has moved by this much (0.1%), not at every step.
@@ -63,7 +63,7 @@ def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator
     return k
 
 
-class SarsaAAC(BaseAlgorithm):
+class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     """
     SARSA Actor-Actor-Critic (SARSA-AAC) for parameterized actions: pick one of K action types, then a real-valued
     parameter vector for it.
@@ -96,10 +96,11 @@ class SarsaAAC(BaseAlgorithm):
     bounds. Schedules of progress (exploration and learning rates) are re-evaluated every 0.1% of training
     progress rather than at every step; the episode schedule at every episode end.
 
-    Every approximator takes normalised steps (see :mod:`sb3_aac.common.approximators`): for one sample a learning
+    Every approximator takes normalised steps (see :mod:`sb3_aac.sarsa_aac.approximators`): for one sample a learning
     rate of 1 moves a linear approximator's output onto its target, and for a batch of lanes the summed step is
     divided by a bound on how much the lanes' steps add up, so any rate in ``(0, 1]`` is stable whatever the number
-    of lanes or features. Rates are validated to lie in ``(0, 1]``.
+    of lanes or features. Rates are validated to lie in ``[0, 1]``; 0 freezes an approximator (as rl-zoo3's ``enjoy``
+    loads a model only to act, with ``custom_objects={"learning_rate": 0.0}``).
 
     Reward units do not matter: ``return_scale`` is the root mean square of the lanes' discounted returns
     (``G <- gamma * G + r``, reset at episode ends) over all steps so far. When it first becomes non-zero, the
@@ -114,9 +115,8 @@ class SarsaAAC(BaseAlgorithm):
     non-finite value the weights are restored to that copy and a ``FloatingPointError`` names the approximators;
     ``save`` after it saves a usable model.
 
-    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; then
-    ``actions`` in the callbacks' locals is the pair (types, scaled parameters) and ``infos`` holds dicts only for
-    the lanes whose episode ended. Other envs are stepped with SB3's ``env.step``.
+    Envs offering the array path (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays, other envs
+    with SB3's ``env.step``; the callbacks' locals are the same on both (see :mod:`sb3_aac.common.array_env`).
     All updates are closed-form numpy on the CPU, vectorised over environments; ``device`` only says where the
     parameters are stored between ``learn()`` calls. Callbacks run after ``env.step`` and before that step's
     update.
@@ -134,10 +134,11 @@ class SarsaAAC(BaseAlgorithm):
     2,100 episodes on every seed, against 3 of 5 seeds by 5,600), but tied on RoboCupDribble-v0 (21.9 vs 21.8 m) and
     navigation (0.996 vs 0.995) and lost on the toy env (8.9 vs 9.3 after 20k steps).
 
-    :param policy: The policy model to use (MlpPolicy, RbfMlpPolicy, RbfPolicy)
+    :param policy: The policy model to use (TilePolicy, recommended; MlpPolicy, RbfMlpPolicy, RbfPolicy; or a
+        SarsaAACPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
-    :param learning_rate: Critic learning rate (normalised, in ``(0, 1]``), or a schedule of the progress
-        remaining (from 1 to 0) whose values at 1 and 0 are in ``(0, 1]``
+    :param learning_rate: Critic learning rate (normalised, in ``[0, 1]``), or a schedule of the progress
+        remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``
     :param q_learning_rate: Action-type actor learning rate, or a schedule
     :param param_learning_rate: Parameter actor learning rate, or a schedule
     :param gamma: The discount factor
@@ -161,11 +162,13 @@ class SarsaAAC(BaseAlgorithm):
         the reported success rate, mean episode length, and mean reward over
     :param log_min_timesteps: ``learn(log_interval=n)`` dumps the logs once ``n`` episodes (SB3's off-policy
         convention) *and* at least this many env steps (counted over all lanes) have passed since the previous
-        dump or the start of ``learn``. The spacing in steps keeps logging a fixed share of the work whatever the
-        number of lanes (with 256 lanes, episodes end at every step, so ``n`` episodes alone would dump at every
-        step); 0 dumps every ``n`` episodes, as SB3's DQN does.
+        dump. The spacing in steps keeps logging a fixed share of the work whatever the number of lanes (with 256
+        lanes, episodes end at every step, so ``n`` episodes alone would dump at every step); 0 dumps every ``n``
+        episodes, as SB3's DQN does. The first dump of a ``learn`` call comes after its first ``n`` episodes, without
+        the spacing, and ``learn`` ends with a dump of what it logged since the last one.
     :param tensorboard_log: the log location for tensorboard (if None, no logging)
-    :param policy_kwargs: additional arguments to be passed to the policy on creation (see :class:`SarsaAACPolicy`)
+    :param policy_kwargs: additional arguments to be passed to the policy on creation (see :class:`DenseBankPolicy`
+        for MlpPolicy, RbfMlpPolicy and RbfPolicy, :class:`TilePolicy`)
     :param verbose: Verbosity level: 0 for no output, 1 for info messages (such as device or wrappers used), 2 for
         debug messages
     :param seed: Seed for the pseudo random generators
@@ -184,6 +187,8 @@ class SarsaAAC(BaseAlgorithm):
     # divergence; None until first kept). Set in _reset_train_stats.
     _lane_returns: np.ndarray | None
     _finite_weights: dict[str, th.Tensor] | None
+    # The policy's training kernel, bound when learn() starts.
+    _kernel: Kernel[Any]
 
     def __init__(
         self,
@@ -239,13 +244,8 @@ class SarsaAAC(BaseAlgorithm):
         self.param_noise_final = param_noise_final
         self.trace_lambda = trace_lambda
         self.replacing_traces = replacing_traces
-        # Run-time checks of user input that the annotations cannot guarantee.
-        if isinstance(info_keywords, str) or not all(isinstance(key, str) for key in info_keywords):  # type: ignore[redundant-expr, unreachable]
-            raise ValueError(
-                f"info_keywords must be a tuple of info keys (str), got {info_keywords!r}; "
-                f"for one key write ({info_keywords!r},)"
-            )
-        self.info_keywords = tuple(info_keywords)
+        self._set_info_keywords(info_keywords)
+        # A run-time check of user input that the annotation cannot guarantee.
         if not (isinstance(log_min_timesteps, (int, np.integer)) and log_min_timesteps >= 0):  # type: ignore[redundant-expr]
             raise ValueError(f"log_min_timesteps must be a whole number of env steps >= 0, got {log_min_timesteps!r}")
         self.log_min_timesteps = int(log_min_timesteps)
@@ -256,9 +256,9 @@ class SarsaAAC(BaseAlgorithm):
         for name in ("learning_rate", "q_learning_rate", "param_learning_rate"):
             rate = getattr(self, name)
             values = (rate(1.0), rate(0.0)) if callable(rate) else (rate,)
-            if not all(isinstance(v, (int, float, np.floating)) and 0 < v <= 1 for v in values):
+            if not all(isinstance(v, (int, float, np.floating)) and 0 <= v <= 1 for v in values):
                 raise ValueError(
-                    f"{name} must be in (0, 1] (a normalised step; 1 lands one sample on its target), got "
+                    f"{name} must be in [0, 1] (a normalised step; 1 lands one sample on its target, 0 learns nothing), got "
                     f"{values[0] if len(values) == 1 else f'a schedule from {values[0]} to {values[1]}'}"
                 )
         if self.type_exploration not in TYPE_EXPLORATIONS:
@@ -299,7 +299,7 @@ class SarsaAAC(BaseAlgorithm):
         # SB3 types policy_class as type[BasePolicy]; __init__ checked that it is a SarsaAACPolicy.
         self.policy = self.policy_class(self.observation_space, self.action_space, **self.policy_kwargs)  # type: ignore[assignment]
         self.policy = self.policy.to(self.device)
-        if self.trace_lambda > 0 and not isinstance(self.policy.approximators, TileBank):
+        if self.trace_lambda > 0 and not isinstance(self.policy, TilePolicy):
             raise ValueError(
                 f"trace_lambda > 0 (got {self.trace_lambda}) needs linear tile heads (TilePolicy); "
                 f"{type(self.policy).__name__} learns with one-step updates only (trace_lambda=0)"
@@ -312,9 +312,6 @@ class SarsaAAC(BaseAlgorithm):
         # Kept when load() calls this after restoring them (0 until the first non-zero reward).
         self._return_moments = getattr(self, "_return_moments", np.zeros(2))
         self.return_scale = getattr(self, "return_scale", 0.0)
-        # Whether the Q and V weights are in return units yet. A model saved before return scaling existed (loaded
-        # with timesteps but without this flag) has trained weights in reward units: they must not be rescaled.
-        self._value_units_set = getattr(self, "_value_units_set", self.num_timesteps > 0)
         self._reset_keyword_buffers()
         self._reset_train_stats()
 
@@ -328,9 +325,8 @@ class SarsaAAC(BaseAlgorithm):
         return [
             *super()._excluded_save_params(),
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
-            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_type_counts"),
-            *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_traces", "_trace_hits"),
-            "_ep_keyword_buffers",
+            *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_action_stats"),
+            *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_dumped_in_learn", "_traces", "_trace_hits"),
         ]
 
     # ------------------------------------------------------------------ acting
@@ -372,7 +368,7 @@ class SarsaAAC(BaseAlgorithm):
         """
         if deterministic:
             return self.policy.predict(observation, state, episode_start, deterministic=True)
-        obs, vectorized = self.policy.observation_batch(observation)
+        obs, vectorized = observation_batch(observation, self.observation_space)
         out, _ = self.policy.evaluate(obs)
         k, params = self._explore(out)
         return self.policy.actions_from_outputs(out, k, params, vectorized), state
@@ -394,7 +390,7 @@ class SarsaAAC(BaseAlgorithm):
         :param total_timesteps: The total number of samples (env steps) to train on
         :param callback: callback(s) called at every step with state of the algorithm.
         :param log_interval: Dump the logs every ``log_interval`` finished episodes, but at most once per
-            ``log_min_timesteps`` env steps (see the class docstring; None: never)
+            ``log_min_timesteps`` env steps, and at the end (see the class docstring; None: never)
         :param tb_log_name: the name of the run for TensorBoard logging
         :param reset_num_timesteps: whether or not to reset the current timestep number (used in logging)
         :param progress_bar: Display a progress bar using tqdm and rich.
@@ -404,9 +400,8 @@ class SarsaAAC(BaseAlgorithm):
         total_timesteps, callback = self._setup_learn(
             total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
         )
-        if reset_num_timesteps:  # like ep_info_buffer in _setup_learn
-            self._reset_keyword_buffers()
         self._last_dump = (self._episode_num, self.num_timesteps)
+        self._dumped_in_learn = False
         callback.on_training_start(locals(), globals())
         assert self.env is not None
         env = self.env
@@ -428,15 +423,16 @@ class SarsaAAC(BaseAlgorithm):
                 # Callbacks see ``actions`` in locals(): the env's actions, or (types, params) on the array path.
                 actions: np.ndarray | tuple[np.ndarray, np.ndarray]
                 new_obs: np.ndarray
-                infos: list[Mapping[str, Any]]
+                infos: list[dict[str, Any]]
                 if array_env is None:
                     actions = self.policy.spec.to_env(k, params)
                     # SB3 types VecEnv observations as a union; a Box observation space gives an array.
                     new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
                 else:
                     actions = (k, params)
-                    new_obs, rewards, dones, infos = self._step_arrays(array_env, k, params)
+                    new_obs, rewards, dones, infos = step_as_vec_env(array_env, k, self.policy.spec.unscale(params))
                 self.num_timesteps += env.num_envs
+                check_finite_step(new_obs, rewards, self.num_timesteps)
 
                 callback.update_locals(locals())
                 if not callback.on_step():
@@ -448,37 +444,20 @@ class SarsaAAC(BaseAlgorithm):
                 any_done = bool(dones.any())
                 if any_done:  # episode statistics and success flags exist only where an episode ended
                     ended = np.flatnonzero(dones)
-                    # SB3 annotates the infos as dicts but only reads them.
-                    self._update_info_buffer([infos[i] for i in ended], dones[ended])  # type: ignore[misc]
+                    self._update_info_buffer([infos[i] for i in ended], dones[ended])
                 self._train_step(new_obs, rewards, dones, infos, any_done)
                 self._last_obs, self._last_episode_starts = new_obs, dones
                 if any_done:
                     self._on_episodes_end(dones, infos, log_interval)
             self._flush_td_chunks()
+            if log_interval is not None and self.num_timesteps > self._last_dump[1]:
+                self.dump_logs()
         finally:
             if self.device.type != "cpu":
                 self.policy.to(self.device)
         callback.on_rollout_end()
         callback.on_training_end()
         return self
-
-    def _step_arrays(
-        self, env: Any, k: np.ndarray, params: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Mapping[str, Any]]]:
-        """
-        One step on the array path (:mod:`sb3_aac.common.array_env`), returned as SB3's ``VecEnv.step`` would:
-        ``info`` dicts are built only for the lanes whose episode ended (the others share one empty dict).
-        """
-        step = env.step_arrays(k, self.policy.spec.unscale(params))
-        dones = step.terminated | step.truncated
-        infos: list[Mapping[str, Any]] = [_NO_INFO] * len(dones)
-        for i in np.flatnonzero(dones):
-            info = {key: values[i] for key, values in step.episode_info.items()}
-            info["episode"] = {"r": float(step.episode_returns[i]), "l": int(step.episode_lengths[i])}
-            info["terminal_observation"] = step.terminal_observations[i]
-            info["TimeLimit.truncated"] = bool(step.truncated[i])
-            infos[i] = info
-        return step.observations, step.rewards, dones, infos
 
     def _update_schedules(self) -> None:
         """Evaluate the exploration and learning-rate schedules at the current progress."""
@@ -499,7 +478,7 @@ class SarsaAAC(BaseAlgorithm):
         self.param_noise = self.param_noise_schedule(progress)
 
     def _train_step(
-        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[Mapping[str, Any]], any_done: bool
+        self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]], any_done: bool
     ) -> None:
         """One SARSA-AAC update of every approximator, for all envs at once; then choose the next action."""
         policy, kernel, gamma = self.policy, self._kernel, self.gamma
@@ -544,17 +523,16 @@ class SarsaAAC(BaseAlgorithm):
         err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
         err[:, vi] = delta
         if self._traces is None:
-            # The cache comes from the same kernel's forward pass, so its kind matches (mypy cannot pair the unions).
-            kernel.update(cache, err, self._lr, self._hidden_gain)  # type: ignore[arg-type]
+            kernel.update(cache, err, self._lr, self._hidden_gain)
         else:
             assert isinstance(kernel, TileKernel)  # checked in _setup_model
-            kernel.update_traced(cache, err, self._lr, self._trace_hits[k], self._traces)  # type: ignore[arg-type]
+            kernel.update_traced(cache, err, self._lr, self._trace_hits[k], self._traces)
             if any_done:
                 self._traces.clear(np.flatnonzero(dones))
         self._n_updates += 1
 
         self._pending = (next_obs, next_k, next_params)
-        self._td_chunks.append((delta, q_error, k))
+        self._td_chunks.append((delta, q_error, k, params, current[:, vi]))
         if len(self._td_chunks) >= CHECK_INTERVAL:
             self._flush_td_chunks()
             self._keep_finite_weights()
@@ -576,10 +554,9 @@ class SarsaAAC(BaseAlgorithm):
         lane_returns[dones] = 0.0
         count, square_sum = self._return_moments
         scale = math.sqrt(square_sum / count)
-        if scale > 0 and not self._value_units_set:
-            self.policy.scale_value_outputs(scale)
-            self._value_units_set = True
         if scale > 0:
+            if self.return_scale == 0:  # the Q and V weights are not in return units yet
+                self.policy.scale_value_outputs(scale)
             self.return_scale = scale
             self._set_return_units()
 
@@ -594,7 +571,7 @@ class SarsaAAC(BaseAlgorithm):
     def _keep_finite_weights(self) -> None:
         """Check the weights and keep a copy of them as the last finite ones (restored on divergence)."""
         self._check_weights()
-        self._finite_weights = {name: p.detach().clone() for name, p in self.policy.approximators.named_parameters()}
+        self._finite_weights = {name: p.detach().clone() for name, p in self.policy.named_parameters()}
         self._finite_weights_timestep = self.num_timesteps
 
     def _on_non_finite_outputs(self, batch: np.ndarray) -> None:
@@ -609,18 +586,12 @@ class SarsaAAC(BaseAlgorithm):
 
     # ------------------------------------------------------------------ statistics and logging
 
-    def _reset_keyword_buffers(self) -> None:
-        """Windows of the ``info_keywords`` values of finished episodes (like ``ep_info_buffer``)."""
-        self._ep_keyword_buffers: dict[str, deque[float]] = {
-            key: deque(maxlen=self._stats_window_size) for key in self.info_keywords
-        }
-
     def _new_traces(self) -> TileTraces | None:
         """Zero eligibility traces of the action-type actor and the critic, one per lane (None if ``trace_lambda == 0``)."""
         if self.trace_lambda == 0:
             return None
         policy = self.policy
-        assert isinstance(policy.approximators, TileBank)  # checked in _setup_model
+        assert isinstance(policy, TilePolicy)  # checked in _setup_model
         columns = np.array([*range(policy.n_types), policy.value_index])
         # hit[k]: the columns whose trace the features of (s, k) set: Q_k and V.
         self._trace_hits = np.concatenate((np.eye(policy.n_types), np.ones((policy.n_types, 1))), axis=1)
@@ -633,24 +604,24 @@ class SarsaAAC(BaseAlgorithm):
         )
 
     def _reset_train_stats(self) -> None:
-        n_types = self.policy.n_types
         self._lr = np.zeros(self.policy.value_index + 1)
         self._rows = np.arange(self.n_envs)
-        self._td_chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        # Per step since the last flush: delta, the SARSA error, the executed types and scaled parameters, V(s).
+        self._td_chunks: list[tuple[np.ndarray, ...]] = []
         self._hidden_gain = np.ones_like(self._lr)
         self._set_return_units()
         self._lane_returns = None
         self._finite_weights = None
         self._finite_weights_timestep = 0
-        # Sums since the last dump (TRAIN_STAT_FIELDS); type counts.
+        # Sums since the last dump (TRAIN_STAT_FIELDS); the executed actions and the critic's values.
         self._train_stats = np.zeros(len(TRAIN_STAT_FIELDS))
-        self._type_counts = np.zeros(n_types, dtype=np.int64)
+        self._action_stats = ActionStats(self.policy.spec)
 
     def _flush_td_chunks(self) -> None:
         """Fold the per-step TD errors into the running sums, and stop on divergence."""
         if not self._td_chunks:
             return
-        delta, q_error, k = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
+        delta, q_error, k, params, values = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
         self._td_chunks.clear()
         sums = {
             "n": len(delta),
@@ -666,10 +637,10 @@ class SarsaAAC(BaseAlgorithm):
         if not np.isfinite(sums["q_error_sq"]):
             self._raise_divergence("the action-type actor's SARSA error")
         self._train_stats += [sums[name] for name in TRAIN_STAT_FIELDS]
-        self._type_counts += np.bincount(k, minlength=len(self._type_counts))
+        self._action_stats.add(k, params, values)
 
     def _check_weights(self) -> None:
-        finite = self.policy.approximators.finite_outputs()
+        finite = self.policy.finite_outputs()
         if not finite.all():
             policy = self.policy
             names = []
@@ -686,7 +657,7 @@ class SarsaAAC(BaseAlgorithm):
         restored = "the weights were not restored (no finite copy)"
         if self._finite_weights is not None:
             with th.no_grad():
-                for name, p in self.policy.approximators.named_parameters():
+                for name, p in self.policy.named_parameters():
                     p.copy_(self._finite_weights[name])
             restored = (
                 f"the weights were restored to those of timestep {self._finite_weights_timestep}, "
@@ -694,18 +665,16 @@ class SarsaAAC(BaseAlgorithm):
             )
         self._pending = None  # choose afresh with the restored weights
         self._traces = None
-        raise FloatingPointError(
-            f"SarsaAAC diverged: {what} became non-finite (nan or inf) by timestep {self.num_timesteps}; {restored}. "
+        remedy = (
             f"Lower the learning rates (learning_rate={self.learning_rate}, q_learning_rate={self.q_learning_rate}, "
-            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in (0, 1]), lower gamma, "
-            "or rescale the rewards; also check that the env returns finite rewards and observations."
+            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in [0, 1]), lower gamma, "
+            "or rescale the rewards"
         )
+        raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy, restored)
 
-    def _on_episodes_end(self, dones: np.ndarray, infos: list[Mapping[str, Any]], log_interval: int | None) -> None:
+    def _on_episodes_end(self, dones: np.ndarray, infos: list[dict[str, Any]], log_interval: int | None) -> None:
         for i in np.flatnonzero(dones):
-            for key, buffer in self._ep_keyword_buffers.items():
-                if key in infos[i]:
-                    buffer.append(float(infos[i][key]))
+            self._add_episode_keywords(infos[i])
         self._episode_num += int(dones.sum())
         if self.exploration_episodes is not None and self._episode_num <= self.exploration_episodes + len(dones):
             self._update_exploration()
@@ -713,7 +682,7 @@ class SarsaAAC(BaseAlgorithm):
         if (
             log_interval is not None
             and self._episode_num - episodes >= log_interval
-            and self.num_timesteps - timesteps >= self.log_min_timesteps
+            and (self.num_timesteps - timesteps >= self.log_min_timesteps or not self._dumped_in_learn)
         ):
             self.dump_logs()
 
@@ -729,17 +698,14 @@ class SarsaAAC(BaseAlgorithm):
         if len(self.ep_info_buffer) > 0 and len(self.ep_info_buffer[0]) > 0:
             record("rollout/ep_rew_mean", safe_mean([ep_info["r"] for ep_info in self.ep_info_buffer]))
             record("rollout/ep_len_mean", safe_mean([ep_info["l"] for ep_info in self.ep_info_buffer]))
-        for key, buffer in self._ep_keyword_buffers.items():
-            if buffer:
-                record(f"rollout/ep_{key}_mean", safe_mean(list(buffer)))
+        self._record_keyword_means()
         if len(self.ep_success_buffer) > 0:
             record("rollout/success_rate", safe_mean(self.ep_success_buffer))
         record("rollout/exploration_rate", self.exploration_rate)
         stats = dict(zip(TRAIN_STAT_FIELDS, self._train_stats, strict=True))
         n = stats["n"]
+        self._action_stats.record(self.logger)
         if n > 0:
-            for k, count in enumerate(self._type_counts):
-                record(f"rollout/type_freq_{k}", count / n)
             record("train/td_error_mean", stats["delta"] / n)
             record("train/td_error_abs_mean", stats["delta_abs"] / n)
             record("train/critic_loss", stats["delta_sq"] / n)
@@ -756,8 +722,8 @@ class SarsaAAC(BaseAlgorithm):
         record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
         self.logger.dump(step=self.num_timesteps)
         self._last_dump = (self._episode_num, self.num_timesteps)
+        self._dumped_in_learn = True
         self._train_stats[:] = 0
-        self._type_counts[:] = 0
 
     # ------------------------------------------------------------------ persistence
 

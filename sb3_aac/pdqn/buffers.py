@@ -8,6 +8,7 @@ import numpy as np
 import torch as th
 from gymnasium import spaces
 
+from sb3_aac.common.sizes import check_allocation, is_whole
 from sb3_aac.common.spaces import ParameterizedActionSpec
 
 
@@ -63,8 +64,12 @@ class ParameterizedReplayBuffer:
     ):
         if not isinstance(observation_space, spaces.Box):
             raise ValueError(f"ParameterizedReplayBuffer stores Box observations, got {observation_space}")
-        if buffer_size < 1 or n_envs < 1:
-            raise ValueError(f"buffer_size and n_envs must be >= 1, got {buffer_size} and {n_envs}")
+        if not (is_whole(buffer_size) and is_whole(n_envs)) or buffer_size < 1 or n_envs < 1:
+            raise ValueError(f"buffer_size and n_envs must be whole numbers >= 1, got {buffer_size!r} and {n_envs!r}")
+        obs_size = int(np.prod(observation_space.shape))
+        n_params = ParameterizedActionSpec.from_space(action_space).n_params
+        per_transition = obs_size * (1 if optimize_memory_usage else 2) + n_params + 4  # float32 / int64 fields
+        check_allocation(f"The replay buffer (buffer_size={buffer_size:,})", max(buffer_size, n_envs) * per_transition, 4)
         if optimize_memory_usage and handle_timeout_termination:
             raise ValueError(
                 "optimize_memory_usage=True and handle_timeout_termination=True cannot be combined: the memory-efficient "

@@ -41,17 +41,15 @@ torch op runs per step. ``ApproximatorBank.forward`` runs the same numpy code an
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import torch as th
 from torch import nn
 
+from sb3_aac.common.sizes import check_allocation, is_whole
 from sb3_aac.runtime.forward import BankForward, check_rbf_window
-
-if TYPE_CHECKING:
-    from sb3_aac.common.tile_coding import TileKernel
-    from sb3_aac.runtime.forward import TileForward
+from sb3_aac.sarsa_aac.kernels import ForwardPass, NumpyKernel
 
 # RBFs farther than this many standard deviations from the input are not computed (0): below exp(-12.5) = 3.7e-6.
 DEFAULT_RBF_WINDOW = 5.0
@@ -63,8 +61,8 @@ def rbf_layout(n_inputs: int, n_rbf: int, rbf_width: float) -> tuple[np.ndarray,
 
     :return: ``centers`` and ``widths``, each of shape ``(n_inputs, n_rbf)``
     """
-    if n_rbf < 1:
-        raise ValueError(f"n_rbf must be >= 1, got {n_rbf}")
+    if not (is_whole(n_rbf) and n_rbf >= 1):
+        raise ValueError(f"n_rbf must be a whole number >= 1, got {n_rbf!r}")
     if not rbf_width > 0:
         raise ValueError(f"rbf_width must be > 0, got {rbf_width}")
     centers = np.linspace(-1.0, 1.0, n_rbf) if n_rbf > 1 else np.zeros(1)
@@ -92,7 +90,7 @@ class NumpyBank(nn.Module):
 
     def __init__(self) -> None:
         super().__init__()
-        self._kernel: BankKernel | TileKernel | None = None
+        self._kernel: NumpyKernel[Any] | None = None
         # load_state_dict copies in place, but the kernel's constants derived from the buffers would go stale.
         self.register_load_state_dict_post_hook(  # type: ignore[no-untyped-call]  # untyped in torch
             lambda module, incompatible_keys: module.invalidate_kernel()
@@ -103,10 +101,12 @@ class NumpyBank(nn.Module):
         # Weights are updated by hand (no autograd); float64 keeps many tiny online steps accurate.
         return nn.Parameter(th.empty(shape, dtype=th.float64).uniform_(-bound, bound), requires_grad=False)
 
-    def _make_kernel(self) -> BankKernel | TileKernel:
+    def _make_kernel(self) -> NumpyKernel[Any]:
+        """The kernel on zero-copy views of this bank's CPU parameters."""
         raise NotImplementedError
 
-    def _forward_pass(self) -> BankForward | TileForward:
+    def _forward_pass(self) -> ForwardPass:
+        """The forward pass on CPU copies of this bank's arrays (for parameters stored on another device)."""
         raise NotImplementedError
 
     def _output_weights(self) -> tuple[th.Tensor, th.Tensor, int]:
@@ -129,7 +129,7 @@ class NumpyBank(nn.Module):
         """:meth:`evaluate` for a tensor ``(n, D)``: a float64 tensor ``(n, A)`` on ``obs``'s device (no autograd)."""
         return th.as_tensor(self.evaluate(obs.detach().cpu().numpy()), device=obs.device)
 
-    def numpy_kernel(self) -> BankKernel | TileKernel:
+    def numpy_kernel(self) -> NumpyKernel[Any]:
         """
         Numpy evaluation and update on zero-copy views of the (CPU) parameters, built once and cached.
 
@@ -202,8 +202,10 @@ class ApproximatorBank(NumpyBank):
                 f"RBF features need finite bounds for every input, got low={low}, high={high}; "
                 "pass finite bounds for the RBF placement (policy_kwargs obs_bounds=(low, high))"
             )
-        if hidden_units is not None and hidden_units < 1:
-            raise ValueError(f"hidden_units must be >= 1 or None, got {hidden_units}")
+        if hidden_units is not None and not (is_whole(hidden_units) and hidden_units >= 1):
+            raise ValueError(f"hidden_units must be a whole number >= 1 or None, got {hidden_units!r}")
+        n_weights = n_outputs * len(low) * (n_rbf or 1) * (hidden_units or 1)
+        check_allocation(f"The approximators (n_rbf={n_rbf}, hidden_units={hidden_units})", n_weights)
         self.n_inputs, self.n_outputs = len(low), n_outputs
         self.n_rbf, self.hidden_units = n_rbf, hidden_units
         check_rbf_window(rbf_window)

@@ -13,7 +13,7 @@ Every feature has its own weight (no hashing: the table holds every tile of ever
 activates exactly ``C = n_groups * n_tilings`` features, so evaluation and training cost ``O(C)`` per approximator,
 whatever the table size. The forward pass is :class:`sb3_aac.runtime.forward.TileForward` (shared with the exported
 runtime); :class:`TileKernel` adds the update, the same normalised batch step as the dense banks
-(:func:`sb3_aac.common.approximators.step_normalisers`) computed on the sparse features: with ``w = 1 / (1 + C)``,
+(:func:`sb3_aac.sarsa_aac.approximators.step_normalisers`) computed on the sparse features: with ``w = 1 / (1 + C)``,
 sample ``i``'s weight step is scaled by ``w / c_w`` with ``c_w = max(1, max_i sum_{f active in i} n_f / C)``,
 ``n_f`` the number of samples of the batch in which feature ``f`` is active, and its bias step by
 ``w / max(1, n)``. For one sample, and for ``n`` identical ones, a rate of 1 lands the output on its target.
@@ -31,7 +31,7 @@ import numpy as np
 import torch as th
 from torch import nn
 
-from sb3_aac.common.approximators import NumpyBank
+from sb3_aac.sarsa_aac.approximators import NumpyBank
 from sb3_aac.runtime.forward import TileForward
 
 
@@ -123,7 +123,7 @@ class TileBank(NumpyBank):
         low, high = np.asarray(low, dtype=np.float64).ravel(), np.asarray(high, dtype=np.float64).ravel()
         if low.shape != high.shape or not np.all(low < high) or not np.isfinite(low).all() or not np.isfinite(high).all():
             raise ValueError(f"Tile coding needs finite low < high elementwise with equal shapes, got low={low}, high={high}")
-        self.n_inputs, self.n_outputs, self.hidden_units = len(low), n_outputs, None
+        self.n_inputs, self.n_outputs = len(low), n_outputs
         self.groups = default_tile_groups(self.n_inputs) if groups is None else check_tile_groups(groups, self.n_inputs)
         layout = tile_layout(self.groups, tiles_per_input, n_tilings)
         self.tiles_per_input, self.n_tilings, self.n_features = tiles_per_input, n_tilings, layout.n_features

@@ -1,0 +1,33 @@
+"""The observation check shared by every policy and algorithm of this package."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+
+def observation_batch(observation: Any, observation_space: spaces.Space[Any]) -> tuple[np.ndarray, bool]:
+    """
+    ``observation`` as a float64 batch ``(n, *obs_shape)``, and whether it was a batch already.
+
+    One observation of ``observation_space.shape`` becomes a batch of one; an array of shape ``(n, *obs_shape)`` is
+    a batch of ``n``. The values are unchanged (float32 observations convert to float64 exactly).
+
+    :param observation: one observation or a batch, anything ``numpy.asarray`` takes
+    :param observation_space: the ``Box`` space the observations belong to
+    :raises ValueError: for a space without a shape, a wrong observation shape, or NaN or inf values
+    """
+    obs = np.asarray(observation, dtype=np.float64)
+    shape = observation_space.shape
+    if shape is None:
+        raise ValueError(f"The observation space {observation_space} has no shape; the policy needs a Box")
+    if obs.shape == shape or obs.shape[1:] == shape:
+        if not np.isfinite(obs).all():
+            raise ValueError(f"The observation holds NaN or inf values: {observation}")
+        return (obs.reshape(1, *shape), False) if obs.shape == shape else (obs, True)
+    raise ValueError(
+        f"Error: Unexpected observation shape {obs.shape} for Box environment, "
+        f"please use {shape} or (n_env, {', '.join(map(str, shape))}) for the observation shape."
+    )
