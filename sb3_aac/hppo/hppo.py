@@ -238,7 +238,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
         callback.on_rollout_start()
         while n_steps < n_rollout_steps:
             with th.no_grad():
-                packed_t, values, type_log_prob, param_log_prob = self.policy(obs_as_tensor(self._last_obs, self.device))  # type: ignore[arg-type]
+                packed_t, values, type_log_prob, param_log_prob = self.policy(obs_as_tensor(self._last_obs, self.device))
             packed = packed_t.cpu().numpy()
             if not np.isfinite(packed).all():
                 self._raise_divergence("the policy's output (the parameter means or standard deviations)")
@@ -271,7 +271,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
                 type_log_prob,
                 param_log_prob,
             )
-            self._last_obs = new_obs  # type: ignore[assignment]
+            self._last_obs = new_obs
             self._last_episode_starts = dones
         with th.no_grad():
             values = self.policy.predict_values(obs_as_tensor(new_obs, self.device))
@@ -291,7 +291,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
             return
         terminal = np.stack([infos[i]["terminal_observation"] for i in lanes])
         with th.no_grad():
-            terminal_values = self.policy.predict_values(obs_as_tensor(terminal, self.device)).cpu().numpy()  # type: ignore[arg-type]
+            terminal_values = self.policy.predict_values(obs_as_tensor(terminal, self.device)).cpu().numpy()
         rewards[lanes] += self.gamma * terminal_values
 
     def _on_episodes_end(self, dones: np.ndarray, infos: list[dict[str, Any]]) -> None:
