@@ -183,7 +183,8 @@ def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, 
     if isinstance(getattr(model, "policy", model), HybridActorCriticPolicy):
         from sb3_aac.hppo.export import export_contents
 
-        header, arrays = export_contents(getattr(model, "policy", model), meta)
+        hybrid = getattr(model, "policy", model)
+        header, arrays = export_contents(hybrid, action_header(hybrid.spec), meta)
     else:
         policy = _policy_of(model)
         header, arrays = policy_header(policy, meta), policy_arrays(policy)

@@ -7,6 +7,7 @@ from stable_baselines3.common.torch_layers import FlattenExtractor
 
 from sb3_aac import HybridPPO
 from sb3_aac.common.envs import ParameterizedTargetEnv
+from sb3_aac.export import action_header, export_policy
 from sb3_aac.hppo.export import export_contents
 from sb3_aac.runtime.actions import unscale
 from tests.helpers import LAYOUTS
@@ -50,7 +51,7 @@ def documented_outputs(header, arrays, obs):
 def test_documented_forward_gives_the_mode(layout, policy_kwargs):
     model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(layout=layout), seed=0, policy_kwargs=policy_kwargs, **SMALL)
     model.learn(64)
-    header, arrays = export_contents(model.policy, {"env_id": "toy"})
+    header, arrays = export_contents(model.policy, action_header(model.policy.spec), {"env_id": "toy"})
     assert header["version"] == 3 and header["algorithm"] == "HybridPPO"
     obs = np.random.default_rng(0).uniform(-1, 1, (50, 2)).astype(np.float32)
     outputs = documented_outputs(header, arrays, obs.astype(np.float64))
@@ -74,4 +75,18 @@ def test_documented_forward_gives_the_mode(layout, policy_kwargs):
 def test_unsupported_layers_are_refused():
     model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(), policy_kwargs=dict(activation_fn=th.nn.GELU), **SMALL)
     with pytest.raises(ValueError, match="Cannot export a GELU layer"):
-        export_contents(model.policy)
+        export_contents(model.policy, action_header(model.policy.spec))
+
+
+@pytest.mark.parametrize("layout", ["nested", "shared"])
+def test_exported_file_decides_as_predict(layout, tmp_path):
+    """export_policy writes a HybridPPO model that RuntimePolicy reads and decides with as predict(deterministic)."""
+    from sb3_aac import RuntimePolicy
+
+    model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(layout=layout), seed=0, **SMALL)
+    model.learn(64)
+    runtime = RuntimePolicy.load(export_policy(model, tmp_path / "policy"))
+    obs = np.random.default_rng(1).uniform(-1, 1, (500, 2)).astype(np.float32)
+    k_expected, _ = model.policy.spec.from_env(model.predict(obs, deterministic=True)[0])
+    types, _ = runtime.act_batch(obs)
+    np.testing.assert_array_equal(types - runtime.type_start, k_expected)

@@ -94,11 +94,13 @@ def networks_head(policy: HybridActorCriticPolicy) -> tuple[dict[str, Any], dict
 
 
 def export_contents(
-    policy: HybridActorCriticPolicy, metadata: dict[str, Any] | None = None
+    policy: HybridActorCriticPolicy, action: dict[str, Any], metadata: dict[str, Any] | None = None
 ) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """The header (without the arrays table) and the arrays of a HybridPPO policy's ``.aacp`` file (version 3)."""
+    """
+    The header (without the arrays table) and the arrays of a HybridPPO policy's ``.aacp`` file (version 3), with
+    ``action`` as the header's action section (:func:`sb3_aac.export.action_header` of the policy's spec).
+    """
     from sb3_aac import __version__
-    from sb3_aac.export import action_header
 
     approximators, arrays = networks_head(policy)
     space = policy.observation_space
@@ -110,7 +112,7 @@ def export_contents(
         "algorithm": "HybridPPO",
         "policy_class": type(policy).__name__,
         "observation": {"shape": [int(s) for s in space.shape], "size": size, "dtype": str(space.dtype)},  # type: ignore[union-attr]
-        "action": action_header(policy.spec),
+        "action": action,
         "approximators": approximators,
         "metadata": dict(metadata or {}),
     }
