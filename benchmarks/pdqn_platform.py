@@ -19,35 +19,30 @@ import gym_platform  # noqa: F401  (registers Platform-v0)
 import gymnasium as gym
 import numpy as np
 import torch as th
-from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 
 from benchmarks.zoo_hyperparams import settings
 from sb3_aac import MPDQN, PDQN, SelectObservation
+from sb3_aac.common.checkpoints import GreedyCheckpoints
 
 
 def make_env(seed: int, n_envs: int = 1):
     return make_vec_env(lambda: SelectObservation(gym.make("Platform-v0"), 0), n_envs=n_envs, seed=seed)
 
 
-class GreedyEvaluation(BaseCallback):
+class GreedyEvaluation(GreedyCheckpoints):
     """Evaluates the greedy policy every ``every`` env steps and records (steps, episodes, mean return)."""
 
     def __init__(self, every: int, episodes: int, seed: int):
-        super().__init__()
-        self.every, self.episodes = every, episodes
-        self.eval_env = make_env(seed + 1000)
+        eval_env = make_env(seed + 1000)
+        super().__init__(every, lambda model: float(evaluate_policy(model, eval_env, episodes, deterministic=True)[0]))
         self.history: list[dict] = []
-        self.next_eval = every
 
-    def _on_step(self) -> bool:
-        if self.num_timesteps >= self.next_eval:
-            self.next_eval += self.every
-            mean, _ = evaluate_policy(self.model, self.eval_env, self.episodes, deterministic=True)
-            row = dict(steps=self.num_timesteps, episodes=self.model.episode_num, mean_return=round(float(mean), 4))
-            self.history.append(row)
-            print(json.dumps(row), flush=True)
+    def on_checkpoint(self, score: float) -> bool:
+        row = dict(steps=self.num_timesteps, episodes=self.model.episode_num, mean_return=round(score, 4))
+        self.history.append(row)
+        print(json.dumps(row), flush=True)
         return True
 
 
