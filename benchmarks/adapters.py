@@ -87,7 +87,7 @@ class DiscreteActionAdapter:
 
 def env_action_space(env_id: str) -> gym.spaces.Space:
     """The parameterized action space of a benchmark env id."""
-    env = gym.make(env_id) if domains.is_dribbling(env_id) else domains.platform_env()
+    env = gym.make(env_id) if domains.is_dribbling(env_id) else domains.episodic_env(env_id)
     try:
         return env.action_space
     finally:

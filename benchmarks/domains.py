@@ -3,9 +3,11 @@
 * Dribbling (``RoboCupDribblePaper-v0``, ``RoboCupDribble-v0``): batched :class:`~robocup_dribble.DribbleVecEnv`
   lanes; scored by :func:`robocup_dribble.evaluation.evaluate_dribbling` (metres along +x), whose episode slots each
   have their own seeded player, start state and noise (common random numbers).
-* Platform (``Platform-v0``, PyPI ``hybrid-platform``): ``SelectObservation(gym.make("Platform-v0"), 0)`` in SB3's
-  ``DummyVecEnv``; scored by the undiscounted return of greedy episodes, episode slot ``j`` of a set with seed ``s``
-  starting from ``reset(seed=s * 1_000_003 + j)``, so every policy meets the same episodes too.
+* Episodic domains (:data:`EPISODIC`): Platform-v0 (PyPI ``hybrid-platform``) and this repository's
+  ``hybrid_domains`` (Goal-v0, Moving-v0, Sliding-v0, CatchPoint-v0), one Gymnasium env each (:func:`episodic_env`)
+  in SB3's ``DummyVecEnv``; scored by greedy episodes, episode slot ``j`` of a set with seed ``s`` starting from
+  ``reset(seed=s * SLOT_STRIDE + j)``, so every policy meets the same episodes too. Each is ranked by its published
+  metric (:func:`metric`): mean return (Platform, Moving, Sliding) or success share (Goal: P(goal); CatchPoint).
 
 Each score comes as the summary every result file uses (:func:`summarize`) plus the per-episode scores in slot
 order, so two policies' episodes can be paired.
@@ -14,6 +16,7 @@ order, so two policies' episodes can be paired.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
@@ -21,12 +24,12 @@ import numpy as np
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import VecEnv
 
-from benchmarks.presets import PLATFORM_ID
+from benchmarks.presets import HYBRID_IDS, PLATFORM_ID
 from robocup_dribble import ENV_PROFILES
 from sb3_aac import SelectObservation
 
 REACH_METRES = 20.0  # the paper's "at least around 20 meters with high reliability" (section 4.1)
-PLATFORM_SLOT_STRIDE = 1_000_003  # a prime: the reset seeds of two evaluation sets never meet
+SLOT_STRIDE = 1_000_003  # a prime: the reset seeds of two evaluation sets never meet
 PLATFORM_SUCCESS_RETURN = 1.0  # Platform's return is the share of the level covered: 1 reaches the goal
 
 # Published Platform-v0 figures (mean return of the trained greedy policy), drawn as reference lines:
@@ -39,24 +42,95 @@ PLATFORM_REFERENCES: tuple[tuple[str, float, str], ...] = (
 )
 
 
+@dataclass(frozen=True)
+class EpisodicDomain:
+    """How an episodic benchmark domain is built and scored.
+
+    :param make: the env learners train and are scored on (Box observations, the env's parameterized actions)
+    :param metric: the summary key that ranks policies, ``"return_mean"`` or ``"success_share"``
+    :param success_key: the ``info`` key that flags a successful episode at its last step, or None: success is a
+        return of at least :data:`PLATFORM_SUCCESS_RETURN`
+    :param references: published figures of ``metric``: (label, value, citation)
+    """
+
+    make: Callable[[], gym.Env]
+    metric: str
+    success_key: str | None
+    references: tuple[tuple[str, float, str], ...]
+
+
+def _platform() -> gym.Env:
+    import gym_platform  # noqa: F401  (registers Platform-v0)
+
+    return SelectObservation(gym.make(PLATFORM_ID), 0)
+
+
+def _hybrid(env_id: str) -> Callable[[], gym.Env]:
+    def make() -> gym.Env:
+        import hybrid_domains  # noqa: F401  (registers the ids)
+
+        env = gym.make(env_id)
+        if env_id == "Goal-v0":  # the reference MP-DQN code's 17 inputs (the state and 3 keeper features)
+            from hybrid_domains.reference_inputs import GoalFeatures
+
+            return GoalFeatures(env)
+        return env
+
+    return make
+
+
+# Published figures of the new domains (Li et al., ICLR 2022 (HyAR), Table 2, as summarised in the issue; DI-engine's
+# Moving-v0 curve read off its docs plot at 3M steps).
+EPISODIC: dict[str, EpisodicDomain] = {
+    PLATFORM_ID: EpisodicDomain(_platform, "return_mean", None, PLATFORM_REFERENCES),
+    "Goal-v0": EpisodicDomain(
+        _hybrid("Goal-v0"),
+        "success_share",
+        "goal",
+        (
+            ("MP-DQN", 0.789, "Bester, James, Konidaris 2019, arXiv:1905.04388"),
+            ("HyAR-TD3", 0.78, "Li et al., ICLR 2022 (HyAR), Table 2"),
+            ("PDQN-TD3", 0.71, "as reported by Li et al., ICLR 2022, Table 2"),
+        ),
+    ),
+    "Moving-v0": EpisodicDomain(
+        _hybrid("Moving-v0"), "return_mean", "success", (("H-PPO", 1.7, "DI-engine docs, gym_hybrid Moving-v0, 3M steps"),)
+    ),
+    "Sliding-v0": EpisodicDomain(_hybrid("Sliding-v0"), "return_mean", "success", ()),
+    "CatchPoint-v0": EpisodicDomain(
+        _hybrid("CatchPoint-v0"), "success_share", "caught", (("HyAR-TD3", 0.90, "Li et al., ICLR 2022 (HyAR), Table 2"),)
+    ),
+}
+assert set(EPISODIC) == {PLATFORM_ID, *HYBRID_IDS}
+
+
 def is_dribbling(env_id: str) -> bool:
     return env_id in ENV_PROFILES
 
 
+def episodic_domain(env_id: str) -> EpisodicDomain:
+    """The :class:`EpisodicDomain` of ``env_id``; a ValueError names the known ids otherwise."""
+    if env_id not in EPISODIC:
+        raise ValueError(f"unknown env id {env_id!r}; the benchmark knows {[*ENV_PROFILES, *EPISODIC]}")
+    return EPISODIC[env_id]
+
+
 def metric(env_id: str) -> str:
     """The key of the summary that ranks policies on ``env_id``."""
-    return "distance_mean" if is_dribbling(env_id) else "return_mean"
+    return "distance_mean" if is_dribbling(env_id) else episodic_domain(env_id).metric
 
 
 def metric_label(env_id: str) -> str:
-    return "metres dribbled" if is_dribbling(env_id) else "mean return"
+    if is_dribbling(env_id):
+        return "metres dribbled"
+    if env_id == "Goal-v0":
+        return "P(goal)"
+    return "mean return" if metric(env_id) == "return_mean" else "success share"
 
 
-def platform_env(wrapper: Callable[[gym.Env], gym.Env] | None = None) -> gym.Env:
-    """One Platform-v0 env with a Box observation (and ``wrapper`` around it, e.g. an action wrapper)."""
-    import gym_platform  # noqa: F401  (registers Platform-v0)
-
-    env: gym.Env = SelectObservation(gym.make(PLATFORM_ID), 0)
+def episodic_env(env_id: str, wrapper: Callable[[gym.Env], gym.Env] | None = None) -> gym.Env:
+    """One env of an episodic domain with a Box observation (and ``wrapper`` around it, e.g. an action wrapper)."""
+    env = episodic_domain(env_id).make()
     return wrapper(env) if wrapper is not None else env
 
 
@@ -71,9 +145,8 @@ def train_env(env_id: str, n_envs: int, seed: int, wrapper: Callable[[gym.Env], 
         env = DribbleVecEnv(n_envs, profile=ENV_PROFILES[env_id])
         env.seed(seed)
         return env
-    if env_id != PLATFORM_ID:
-        raise ValueError(f"unknown env id {env_id!r}; the benchmark knows {[*ENV_PROFILES, PLATFORM_ID]}")
-    return make_vec_env(lambda: platform_env(wrapper), n_envs=n_envs, seed=seed)
+    episodic_domain(env_id)  # a clear error for an unknown id, before any env is built
+    return make_vec_env(lambda: episodic_env(env_id, wrapper), n_envs=n_envs, seed=seed)
 
 
 def distance_stats(d: np.ndarray) -> dict[str, float]:
@@ -81,8 +154,13 @@ def distance_stats(d: np.ndarray) -> dict[str, float]:
     return {"distance_mean": float(np.mean(d)), "distance_median": float(np.median(d)), "distance_max": float(np.max(d))}
 
 
-def summarize(env_id: str, scores: np.ndarray, ball_lost: np.ndarray | None = None) -> dict[str, Any]:
-    """The summary every result file uses, from per-episode scores in slot order (kept under ``"episode_scores"``)."""
+def summarize(
+    env_id: str, scores: np.ndarray, ball_lost: np.ndarray | None = None, success: np.ndarray | None = None
+) -> dict[str, Any]:
+    """The summary every result file uses, from per-episode scores in slot order (kept under ``"episode_scores"``).
+
+    ``ball_lost`` (dribbling, required) and ``success`` (episodic domains with a success flag; without it success is a
+    return of at least :data:`PLATFORM_SUCCESS_RETURN`) are per-episode flags in the same order."""
     d = np.asarray(scores, dtype=float)
     episode_scores = [round(float(x), 4) for x in d]
     if is_dribbling(env_id):
@@ -99,7 +177,7 @@ def summarize(env_id: str, scores: np.ndarray, ball_lost: np.ndarray | None = No
         "episodes": len(d),
         "return_mean": float(np.mean(d)),
         "return_median": float(np.median(d)),
-        "success_share": float(np.mean(d >= PLATFORM_SUCCESS_RETURN - 1e-6)),
+        "success_share": float(np.mean(d >= PLATFORM_SUCCESS_RETURN - 1e-6 if success is None else success)),
         "episode_scores": episode_scores,
     }
 
@@ -112,24 +190,28 @@ def evaluate(env_id: str, policy: Any, n_episodes: int, seed: int) -> dict[str, 
 
         report = evaluate_dribbling(policy, n_episodes, ENV_PROFILES[env_id], seed)
         return summarize(env_id, report.distances, report.ball_lost)
-    return summarize(env_id, platform_returns(policy, n_episodes, seed))
+    return summarize(env_id, *episodic_returns(env_id, policy, n_episodes, seed))
 
 
-def platform_returns(policy: Any, n_episodes: int, seed: int) -> np.ndarray:
-    """Undiscounted returns of greedy Platform episodes, slot ``j`` reset with seed ``seed * PLATFORM_SLOT_STRIDE + j``."""
+def episodic_returns(env_id: str, policy: Any, n_episodes: int, seed: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """Undiscounted returns of greedy episodes of an episodic domain, slot ``j`` reset with seed
+    ``seed * SLOT_STRIDE + j``, and the per-episode success flags if the domain reports them (else None)."""
     if n_episodes < 1:
         raise ValueError(f"n_episodes must be >= 1, got {n_episodes}")
-    env = platform_env()
+    key = episodic_domain(env_id).success_key
+    env = episodic_env(env_id)
     returns = np.zeros(n_episodes)
+    success = np.zeros(n_episodes, dtype=bool)
     try:
         for slot in range(n_episodes):
-            obs, _ = env.reset(seed=seed * PLATFORM_SLOT_STRIDE + slot)
+            obs, _ = env.reset(seed=seed * SLOT_STRIDE + slot)
             done = False
             while not done:
                 action, _ = policy.predict(obs, deterministic=True)
-                obs, reward, terminated, truncated, _ = env.step(action)
+                obs, reward, terminated, truncated, info = env.step(action)
                 returns[slot] += float(reward)
                 done = terminated or truncated
+            success[slot] = bool(info.get(key, False)) if key is not None else False
     finally:
         env.close()
-    return returns
+    return returns, (success if key is not None else None)

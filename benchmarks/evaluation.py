@@ -24,9 +24,9 @@ def evaluation_observations(env_id: str, count: int) -> list[np.ndarray]:
         env = DribbleVecEnv(count, profile=ENV_PROFILES[env_id])
         env.seed(FINAL_SEED)
         return list(env.reset())
-    platform = domains.platform_env()
-    observations = [platform.reset(seed=FINAL_SEED * domains.PLATFORM_SLOT_STRIDE + j)[0] for j in range(count)]
-    platform.close()
+    env = domains.episodic_env(env_id)
+    observations = [env.reset(seed=FINAL_SEED * domains.SLOT_STRIDE + j)[0] for j in range(count)]
+    env.close()
     return observations
 
 

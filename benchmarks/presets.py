@@ -33,8 +33,14 @@ from robocup_dribble import ENV_PROFILES
 
 DRIBBLE_IDS = ("RoboCupDribblePaper-v0", "RoboCupDribble-v0")  # the paper's era first
 PLATFORM_ID = "Platform-v0"
-ENV_IDS = (*DRIBBLE_IDS, PLATFORM_ID)
-ENV_SHORT = {"RoboCupDribblePaper-v0": "paper", "RoboCupDribble-v0": "v19", PLATFORM_ID: "platform"}
+HYBRID_IDS = ("Goal-v0", "Moving-v0", "Sliding-v0", "CatchPoint-v0")  # envs/hybrid_domains (benchmarks.domains)
+ENV_IDS = (*DRIBBLE_IDS, PLATFORM_ID, *HYBRID_IDS)
+ENV_SHORT = {
+    "RoboCupDribblePaper-v0": "paper",
+    "RoboCupDribble-v0": "v19",
+    PLATFORM_ID: "platform",
+    **{env_id: env_id.split("-")[0].lower() for env_id in HYBRID_IDS},
+}
 
 # Evaluation seeds: with common random numbers every policy meets the same episodes of a set (episode slot j of a
 # set plays its own seeded player, start and noise, or Platform's own seeded episode), and none of them is shared with

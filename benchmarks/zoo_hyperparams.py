@@ -3,9 +3,12 @@ train with exactly what ``examples/rl_zoo3_train.py`` trains with: one definitio
 
 from __future__ import annotations
 
+import importlib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import yaml
 
 HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
@@ -21,3 +24,21 @@ def settings(algo: str, env_id: str) -> dict[str, Any]:
     if "policy_kwargs" in entry:
         entry["policy_kwargs"] = eval(entry["policy_kwargs"], {"dict": dict})  # rl-zoo3's convention: a dict() string
     return entry
+
+
+def env_wrapper(algo: str, env_id: str) -> Callable[[gym.Env], gym.Env]:
+    """The ``env_wrapper`` chain of ``env_id``'s entry in ``hyperparams/<algo>.yml`` as one function (rl-zoo3's format:
+    a list of ``module.Class`` names or ``{module.Class: kwargs}`` maps, applied in order; none: the identity)."""
+    entries = yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())[env_id].get("env_wrapper") or []
+    steps: list[tuple[Callable[..., gym.Env], dict[str, Any]]] = []
+    for entry in entries if isinstance(entries, list) else [entries]:
+        name, kwargs = next(iter(entry.items())) if isinstance(entry, dict) else (entry, {})
+        module, _, attribute = name.rpartition(".")
+        steps.append((getattr(importlib.import_module(module), attribute), dict(kwargs or {})))
+
+    def wrap(env: gym.Env) -> gym.Env:
+        for wrapper, kwargs in steps:
+            env = wrapper(env, **kwargs)
+        return env
+
+    return wrap

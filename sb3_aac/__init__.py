@@ -16,7 +16,7 @@ from sb3_aac.runtime import RuntimePolicy
 if TYPE_CHECKING:
     from sb3_aac.export import export_policy
     from sb3_aac.pdqn import MPDQN, PDQN, PDQNPolicy
-    from sb3_aac.sarsa_aac import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy, TilePolicy
+    from sb3_aac.sarsa_aac import DeepPolicy, MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy, TilePolicy
     from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction, SelectObservation
 
 with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handler:
@@ -27,7 +27,8 @@ LAZY_NAMES = {
     "export_policy": "sb3_aac.export",
     **dict.fromkeys(("MPDQN", "PDQN", "PDQNPolicy"), "sb3_aac.pdqn"),
     **dict.fromkeys(
-        ("MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "SarsaAAC", "SarsaAACPolicy", "TilePolicy"), "sb3_aac.sarsa_aac"
+        ("DeepPolicy", "MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "SarsaAAC", "SarsaAACPolicy", "TilePolicy"),
+        "sb3_aac.sarsa_aac",
     ),
     **dict.fromkeys(("DiscretizeParameterizedAction", "FlattenParameterizedAction", "SelectObservation"), "sb3_aac.wrappers"),
 }
@@ -49,6 +50,7 @@ def __dir__() -> list[str]:
 __all__ = [
     "MPDQN",
     "PDQN",
+    "DeepPolicy",
     "DiscretizeParameterizedAction",
     "FlattenParameterizedAction",
     "MlpPolicy",

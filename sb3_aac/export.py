@@ -21,36 +21,38 @@ import numpy as np
 from gymnasium import spaces
 
 from sb3_aac.common.output_files import replaced_atomically
-from sb3_aac.sarsa_aac.policies import DenseBankPolicy, TilePolicy
+from sb3_aac.sarsa_aac.policies import DeepPolicy, DenseBankPolicy, TilePolicy
 from sb3_aac.runtime.format import (
     ARRAY_DTYPE,
     FORMAT_NAME,
-    FORMAT_VERSION,
     TILE_ARRAYS,
     encode_policy_file,
     expected_array_shapes,
     output_layout,
     policy_file_path,
     read_policy_file,
+    written_version,
 )
+from sb3_aac.runtime.forward import network_array_shapes
 
 
-ExportablePolicy = DenseBankPolicy | TilePolicy
-"""The policies the format describes: the numpy banks of the dense families and of tile coding."""
+ExportablePolicy = DenseBankPolicy | TilePolicy | DeepPolicy
+"""The policies the format describes: the numpy banks of the dense families and of tile coding, and the deep
+policy's networks."""
 
 
 def _policy_of(model: Any) -> ExportablePolicy:
     policy = getattr(model, "policy", model)
-    if not isinstance(policy, (DenseBankPolicy, TilePolicy)):
+    if not isinstance(policy, (DenseBankPolicy, TilePolicy, DeepPolicy)):
         raise ValueError(
             "export_policy needs a SarsaAAC model or a SarsaAACPolicy on a numpy bank (MlpPolicy, RbfMlpPolicy, "
-            f"RbfPolicy, TilePolicy or their subclasses), got {type(model).__name__}"
+            f"RbfPolicy, TilePolicy, DeepPolicy or their subclasses), got {type(model).__name__}"
         )
     return policy
 
 
 def policy_arrays(policy: ExportablePolicy) -> dict[str, np.ndarray]:
-    """The arrays of the file format, as float64 numpy arrays, from a dense-bank or tile policy."""
+    """The arrays of the file format, as float64 numpy arrays, from a dense-bank, tile or deep policy."""
     box = policy.observation_space
     assert isinstance(box, spaces.Box)  # SarsaAAC policies take Box observations only
     bank = policy.approximators.arrays()
@@ -65,6 +67,8 @@ def policy_arrays(policy: ExportablePolicy) -> dict[str, np.ndarray]:
     }
     if isinstance(policy, TilePolicy):
         names = [name for name in TILE_ARRAYS if name not in arrays]
+    elif isinstance(policy, DeepPolicy):
+        names = list(network_array_shapes(policy.approximators.networks))
     else:
         names = ["rbf_centers", "rbf_widths"] if policy.n_rbf is not None else []
         names += ["weight", "bias"] if policy.hidden_units is None else ["weight1", "bias1", "weight2", "bias2"]
@@ -73,17 +77,18 @@ def policy_arrays(policy: ExportablePolicy) -> dict[str, np.ndarray]:
 
 
 def policy_header(policy: ExportablePolicy, metadata: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The JSON header (without the arrays table) describing a dense-bank or tile policy."""
+    """The JSON header (without the arrays table) describing a dense-bank, tile or deep policy."""
     from sb3_aac import __version__
 
     bank, spec = policy.approximators, policy.spec
     k, n_params = spec.n_types, spec.n_params
     n_outputs, outputs = output_layout(k, n_params)
+    head = _head_header(policy)
     obs_shape = policy.observation_space.shape
     assert obs_shape is not None  # SarsaAAC policies take Box observations only
     return {
         "format": FORMAT_NAME,
-        "version": FORMAT_VERSION,
+        "version": written_version(head),
         "writer": f"sb3-aac {__version__}",
         "algorithm": "SarsaAAC",
         "policy_class": type(policy).__name__,
@@ -106,13 +111,15 @@ def policy_header(policy: ExportablePolicy, metadata: dict[str, Any] | None = No
             "n_outputs": n_outputs,
             "outputs": outputs,
             "features": _features_header(policy),
-            "head": _head_header(policy),
+            "head": head,
         },
         "metadata": dict(metadata or {}),
     }
 
 
 def _head_header(policy: ExportablePolicy) -> dict[str, Any]:
+    if isinstance(policy, DeepPolicy):
+        return {"type": "networks", "networks": policy.approximators.networks}
     if isinstance(policy, TilePolicy) or policy.hidden_units is None:
         return {"type": "linear"}
     return {"type": "tanh_mlp", "hidden_units": policy.hidden_units}
@@ -130,6 +137,8 @@ def _features_header(policy: ExportablePolicy) -> dict[str, Any]:
             "group_size": int(np.shape(bank.tile_inputs)[1]),
             "n_features": bank.n_features,
         }
+    if isinstance(policy, DeepPolicy):
+        return {"type": "scaled", "n_features": policy.approximators.n_inputs}
     dense = policy.approximators
     if policy.n_rbf is None:
         return {"type": "scaled", "n_features": dense.n_features}
@@ -145,7 +154,8 @@ def _features_header(policy: ExportablePolicy) -> dict[str, Any]:
 
 def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, Any] | None = None) -> Path:
     """
-    Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy``, version 2).
+    Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy``: version 3 for
+    a :class:`~sb3_aac.sarsa_aac.policies.DeepPolicy`, whose ``networks`` head older readers cannot compute, else 2).
 
     :param model: a :class:`sb3_aac.SarsaAAC` model, or its policy
     :param path: where to write; ``.aacp`` is appended when the name has no suffix (``RuntimePolicy.load`` accepts

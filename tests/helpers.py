@@ -10,7 +10,7 @@ from gymnasium import spaces
 
 from sb3_aac import MPDQN, PDQN, SarsaAAC
 
-POLICIES = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy"]
+POLICIES = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy", "DeepPolicy"]
 LAYOUTS = ["nested", "flat", "shared", "oneof"]
 # P-DQN / MP-DQN small and fast: learning from step 50 on minibatches of 16, one hidden layer of 16.
 PDQN_SMALL = dict(learning_starts=50, batch_size=16, policy_kwargs=dict(net_arch=[16]))
@@ -46,7 +46,7 @@ ALGOS = [
     # RbfPolicy first: the SarsaAAC case of ALGO_CLASSES.
     *(
         Algo(SarsaAAC, name, "sarsa_aac", own_tags=_SARSA_AAC_TAGS, log_often=dict(log_min_timesteps=0), exported=True)
-        for name in ("RbfPolicy", "MlpPolicy", "RbfMlpPolicy", "TilePolicy")
+        for name in ("RbfPolicy", "MlpPolicy", "RbfMlpPolicy", "TilePolicy", "DeepPolicy")
     ),
     Algo(PDQN, "MlpPolicy", "pdqn", PDQN_SMALL, _PDQN_TAGS),
     Algo(MPDQN, "MlpPolicy", "mpdqn", PDQN_SMALL, _PDQN_TAGS),

@@ -36,8 +36,12 @@ def test_numpy_views_follow_set_parameters(policy):
     observations = np.random.default_rng(0).uniform(-1, 1, (10, 2)).astype(np.float32)
     params = model.get_parameters()
     before, _ = model.predict(observations, deterministic=True)
+    # (a tile policy's integer grid layout stays; input scales and a deep policy's observation statistics stay > 0)
     random_params = {
-        "policy": {k: th.rand_like(v) * 2 - 1 if v.is_floating_point() else v for k, v in params["policy"].items()}
+        "policy": {
+            k: (th.rand_like(v) + 0.5 if "obs_" in k else th.rand_like(v) * 2 - 1) if v.is_floating_point() else v
+            for k, v in params["policy"].items()
+        }
     }
     model.set_parameters(random_params, exact_match=True)
     out_random, _ = model.policy.evaluate(observations.astype(np.float64))

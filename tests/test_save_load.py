@@ -38,10 +38,14 @@ def test_save_load(tmp_path, case, layout):
     with pytest.raises(RuntimeError, match=f'Missing key\\(s\\) in state_dict: "{first_key}"'):
         model.set_parameters(incomplete, exact_match=True)
 
-    # Random parameters replace every tensor (a tile policy's integer grid layout stays).
+    # Random parameters replace every tensor (a tile policy's integer grid layout stays; input scales and a deep
+    # policy's observation statistics stay > 0).
     random_params = {
         **params,
-        "policy": {k: th.rand_like(v) * 2 - 1 if v.is_floating_point() else v for k, v in params["policy"].items()},
+        "policy": {
+            k: (th.rand_like(v) + 0.5 if "obs_" in k else th.rand_like(v) * 2 - 1) if v.is_floating_point() else v
+            for k, v in params["policy"].items()
+        },
     }
     model.set_parameters(random_params, exact_match=True)
     for key, value in model.get_parameters()["policy"].items():

@@ -235,6 +235,17 @@ def test_every_space_builds_a_model(policy: str) -> None:
         model.learn(20)
 
 
+def test_deep_space_builds_a_model() -> None:
+    settings = TuneSettings(env_id=TOY, policy="DeepPolicy", fixed={"gamma": 0.5})
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
+    for _ in range(3):
+        params = SEARCH_SPACES[("sarsa_aac", "DeepPolicy")].sample(study.ask(), settings.fixed_names())
+        assert "gamma" not in params and 0 <= params["trace_lambda"] <= 0.95
+        model = SarsaAAC("DeepPolicy", toy_envs(2, 0), seed=0, **settings.kwargs(params))
+        assert model.gamma == 0.5 and model.policy.kappa == params["kappa"]
+        model.learn(20)
+
+
 def test_tile_space_builds_a_model() -> None:
     settings = TuneSettings(env_id=TOY, policy="TilePolicy", fixed={"gamma": 0.5})
     study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))

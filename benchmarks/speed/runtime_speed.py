@@ -13,8 +13,8 @@ the numbers.
 Usage: ``python -m benchmarks.speed.runtime_speed [--quick] [--calls 5000] [--repeats 5]``
 
 Targets: <= 10 us per decision for the RBF policy with 10, 30 and 50 RBFs per input; <= 5 us at 50 RBFs
-per input with the default RBF window, decisions identical to ``model.predict`` (tested in
-``tests/test_export.py``).
+per input with the default RBF window; <= 10 us for ``DeepPolicy`` (default networks, two hidden layers of 64);
+decisions identical to ``model.predict`` (tested in ``tests/test_export.py`` and ``tests/test_export_networks.py``).
 """
 
 from __future__ import annotations
@@ -73,9 +73,13 @@ def main(argv: list[str] | None = None) -> None:
     obs = rng.uniform(obs_space.low, obs_space.high).astype(np.float32)
     print(f"us per decision, one observation (best of {args.repeats} x {args.calls} calls; load average {load_average():.2f})")
 
-    configs = [("RbfPolicy", {"n_rbf": n}) for n in ((10, 50) if args.quick else (10, 30, 50))]
+    configs: list[tuple[str, dict[str, Any]]] = [
+        ("RbfPolicy", {"n_rbf": n}) for n in ((10, 50) if args.quick else (10, 30, 50))
+    ]
+    configs.append(("DeepPolicy", {}))
     if not args.quick:
         configs += [("MlpPolicy", {"hidden_units": 2}), ("MlpPolicy", {}), ("RbfMlpPolicy", {})]
+        configs.append(("DeepPolicy", {"net_arch": [128, 128]}))
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for policy, kwargs in configs:

@@ -24,10 +24,13 @@ def median_microseconds(fn: Callable[[], Any], calls: int) -> float:
     return statistics.median(times) * 1e6
 
 
-def steps_per_second(model: Any, steps: int, warmup: int) -> float:
+def steps_per_second(model: Any, steps: int, warmup: int, repeats: int = 1) -> float:
     """Env steps per second of ``model.learn(steps)`` after ``model.learn(warmup)`` (compiled kernels, first
-    allocations, past ``learning_starts``), the timesteps counted on."""
+    allocations, past ``learning_starts``), the timesteps counted on; the best of ``repeats`` timings."""
     model.learn(warmup)
-    start = time.perf_counter()
-    model.learn(steps, reset_num_timesteps=False)
-    return steps / (time.perf_counter() - start)
+    best = 0.0
+    for _ in range(repeats):
+        start = time.perf_counter()
+        model.learn(steps, reset_num_timesteps=False)
+        best = max(best, steps / (time.perf_counter() - start))
+    return best

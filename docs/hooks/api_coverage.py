@@ -1,9 +1,9 @@
-"""mkdocs hook: warn (an error under ``--strict``) when a module of the two packages has no ``::: module`` line.
+"""mkdocs hook: warn (an error under ``--strict``) when a module of the packages has no ``::: module`` line.
 
-Every module of ``sb3_aac`` and ``robocup_dribble`` is rendered on exactly one page: an algorithm's modules on its
-algorithm page, the rest on an API reference page. A module added without a line in some page fails the build with
-a message saying where to add it. Package ``__init__`` files (re-exports) and the modules in :data:`NOT_RENDERED`
-are exempt.
+Every module of ``sb3_aac``, ``robocup_dribble`` and ``hybrid_domains`` is rendered on exactly one page: an
+algorithm's modules on its algorithm page, the rest on an API reference page. A module added without a line in some
+page fails the build with a message saying where to add it. Package ``__init__`` files (re-exports) and the modules
+in :data:`NOT_RENDERED` are exempt.
 """
 
 from __future__ import annotations
@@ -15,7 +15,11 @@ from typing import Any
 
 from mkdocs.config.defaults import MkDocsConfig
 
-PACKAGES = {"sb3_aac": Path("sb3_aac"), "robocup_dribble": Path("envs/robocup_dribble")}
+PACKAGES = {
+    "sb3_aac": Path("sb3_aac"),
+    "robocup_dribble": Path("envs/robocup_dribble"),
+    "hybrid_domains": Path("envs/hybrid_domains"),
+}
 # module or package (with all its modules) -> the page that documents it instead of an API rendering
 NOT_RENDERED = {
     "sb3_aac.cli": "cli.md (the help text of every command)",

@@ -10,10 +10,13 @@ from typing import Any, NamedTuple
 from sb3_aac.cli.arguments import CliError, input_file
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
 
-POLICIES = ("MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy")
+POLICIES = ("MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy", "DeepPolicy")
 # SarsaAAC constructor arguments the CLI sets itself (not through --set).
 RESERVED = ("policy", "env", "tensorboard_log", "seed", "device", "verbose", "_init_setup_model")
-POLICY_KEYS = ("hidden_units", "n_rbf", "rbf_width", "obs_bounds", "tile_groups", "tiles_per_input", "n_tilings")
+POLICY_KEYS = (
+    *("hidden_units", "n_rbf", "rbf_width", "obs_bounds", "tile_groups", "tiles_per_input", "n_tilings"),
+    *("net_arch", "sparsity", "normalize_obs", "kappa"),  # DeepPolicy's
+)
 
 
 class Algorithm(NamedTuple):

@@ -2,7 +2,7 @@
 Greedy SarsaAAC decisions from an exported policy file, with numpy alone.
 
 :func:`sb3_aac.export_policy` writes a trained policy as plain arrays and a JSON description (format
-``sb3-aac-policy`` version 2, see ``docs/export-format.md``); :class:`RuntimePolicy` reads it back and acts::
+``sb3-aac-policy`` versions 2 and 3, see ``docs/export-format.md``); :class:`RuntimePolicy` reads it back and acts::
 
     from sb3_aac.runtime import RuntimePolicy
 

@@ -1,5 +1,5 @@
 """
-The ``.aacp`` policy file format (``sb3-aac-policy`` version 2, see ``docs/export-format.md``): its constants, the
+The ``.aacp`` policy file format (``sb3-aac-policy`` versions 2 and 3, see ``docs/export-format.md``): its constants, the
 arrays a header calls for, the byte layout (:func:`encode_policy_file`, which :func:`sb3_aac.export_policy` writes
 with) and the reader. :func:`read_policy_file` checks the magic bytes, a SHA-256 over the whole file, the format
 version, and the name, dtype, shape and placement of every array before returning any of them;
@@ -20,10 +20,13 @@ from typing import Any
 import numpy as np
 
 from .actions import LAYOUTS
-from .forward import check_rbf_window
+from .forward import check_networks, check_rbf_window, network_array_shapes
 
 FORMAT_NAME = "sb3-aac-policy"
-FORMAT_VERSION = 2  # the only version this reader reads (docs/export-format.md, "Versioning")
+# 2: the first released version; 3: adds the "networks" head (feed-forward networks). Older files are not read.
+FORMAT_VERSION = 3
+SUPPORTED_VERSIONS = (2, 3)
+NETWORKS_VERSION = 3  # the first version with a "networks" head
 MAGIC = b"SB3AACP\x00"  # 8 bytes
 PREAMBLE = struct.Struct("<8sQ")  # magic, header length (bytes)
 DIGEST_SIZE = 32  # the file ends with the SHA-256 of everything before it
@@ -40,6 +43,12 @@ TILE_ARRAYS = (
     *("obs_mid", "obs_half", "tile_inputs", "tile_offsets", "tile_resolution", "tile_strides", "tile_bases"),
     *("tile_weight", "bias"),
 )
+
+
+def written_version(head: dict[str, Any]) -> int:
+    """The version :func:`sb3_aac.export_policy` writes for a header's ``approximators.head``: the oldest that holds
+    it (3 for a ``networks`` head, else 2), so older readers keep reading the policies they can compute."""
+    return NETWORKS_VERSION if head["type"] == "networks" else 2
 
 
 def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
@@ -63,6 +72,8 @@ def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
         c, k = approx["features"]["n_codings"], approx["features"]["group_size"]
         shapes.update(tile_inputs=(c, k), tile_offsets=(c, k), tile_resolution=(c, k), tile_strides=(c, k), tile_bases=(c,))
         shapes.update(tile_weight=(f, a), bias=(a,))
+    elif approx["head"]["type"] == "networks":
+        shapes.update(network_array_shapes(approx["head"]["networks"]))
     elif approx["head"]["type"] == "linear":
         shapes.update(weight=(a, f), bias=(a,))
     else:
@@ -129,7 +140,7 @@ def _positive_int(value: Any) -> bool:
     return _count(value) and value >= 1
 
 
-def _check_features_and_head(features: Any, head: Any, d: int, path: Any) -> None:
+def _check_features_and_head(features: Any, head: Any, d: int, n_outputs: int, version: int, path: Any) -> None:
     """The header's ``features`` and ``head`` sections (``KeyError``/``TypeError`` for a missing or mistyped field)."""
     if features["type"] == "rbf":
         if not _positive_int(features["n_rbf"]) or features["n_features"] != d * features["n_rbf"]:
@@ -151,12 +162,20 @@ def _check_features_and_head(features: Any, head: Any, d: int, path: Any) -> Non
     if head["type"] == "tanh_mlp":
         if not _positive_int(head["hidden_units"]):
             raise _fail(path, f"hidden_units={head['hidden_units']!r}")
+    elif head["type"] == "networks":
+        if version < NETWORKS_VERSION or features["type"] != "scaled":
+            why = f"a networks head needs version >= {NETWORKS_VERSION} and scaled features"
+            raise _fail(path, f"{why}, got version {version}, features {features!r}")
+        try:
+            check_networks(head["networks"], d, n_outputs)
+        except ValueError as error:
+            raise _fail(path, str(error)) from None
     elif head["type"] != "linear":
-        raise _fail(path, f"unknown head type {head['type']!r} (known: 'linear', 'tanh_mlp')")
+        raise _fail(path, f"unknown head type {head['type']!r} (known: 'linear', 'tanh_mlp', 'networks')")
 
 
 def _check_header(header: Any, path: Any) -> None:
-    """Structure and consistency of a header (everything but the arrays)."""
+    """Structure and consistency of a header of a supported version (everything but the arrays)."""
     try:
         obs, action, approx = header["observation"], header["action"], header["approximators"]
         d, shape = obs["size"], obs["shape"]
@@ -184,7 +203,7 @@ def _check_header(header: Any, path: Any) -> None:
         if not (_positive_int(features["n_features"]) and _positive_int(approx["n_outputs"])):
             sizes = f"n_features={features['n_features']!r}, n_outputs={approx['n_outputs']!r}"
             raise _fail(path, f"{sizes}: both must be whole numbers >= 1")
-        _check_features_and_head(features, head, d, path)
+        _check_features_and_head(features, head, d, approx["n_outputs"], header["version"], path)
         outputs = approx["outputs"]
         n_outputs, expected = output_layout(k, offset)
         if approx["n_outputs"] != n_outputs or outputs != expected:
@@ -246,10 +265,10 @@ def _parse_header(text: bytes, path: Any) -> dict[str, Any]:
         found = header.get("format") if isinstance(header, dict) else None
         raise _fail(path, f"format is {found!r}, expected {FORMAT_NAME!r}")
     version = header.get("version")
-    if version != FORMAT_VERSION:
+    if version not in SUPPORTED_VERSIONS:
         raise _fail(
             path,
-            f"unknown format version {version!r}; this reader supports version {FORMAT_VERSION} "
+            f"unknown format version {version!r}; this reader supports versions {list(SUPPORTED_VERSIONS)} "
             "(a newer sb3-aac wrote it? upgrade sb3-aac, or export with this version)",
         )
     _check_header(header, path)

@@ -226,3 +226,173 @@ class TileForward:
     def outputs(self, active: np.ndarray) -> tuple[np.ndarray, None]:
         """Active features ``(n, C)`` -> every output ``(n, A)`` (and None: there is no hidden layer)."""
         return self.w[active].sum(1) + self.b, None
+
+
+LAYER_TYPES = ("linear", "layernorm", "activation")
+ACTIVATIONS = ("tanh", "relu", "leaky_relu")
+
+
+def network_array_shapes(networks: list[dict[str, Any]]) -> dict[str, tuple[int, ...]]:
+    """
+    The arrays a ``networks`` head holds (see :class:`NetworkForward`), by name, with their shapes: for layer ``j``
+    of network ``i``, ``net{i}_{j}_weight`` and ``net{i}_{j}_bias``: ``(out, in)`` and ``(out,)`` for a linear
+    layer, ``(size,)`` each for an affine layer norm; none for a plain layer norm or an activation.
+    """
+    shapes: dict[str, tuple[int, ...]] = {}
+    for i, network in enumerate(networks):
+        for j, layer in enumerate(network["layers"]):
+            if layer["type"] == "linear":
+                shapes[f"net{i}_{j}_weight"], shapes[f"net{i}_{j}_bias"] = (layer["out"], layer["in"]), (layer["out"],)
+            elif layer["type"] == "layernorm" and layer["affine"]:
+                shapes[f"net{i}_{j}_weight"] = shapes[f"net{i}_{j}_bias"] = (layer["size"],)
+    return shapes
+
+
+def check_networks(networks: Any, n_inputs: int, n_outputs: int) -> None:
+    """
+    A ``ValueError`` unless ``networks`` (a header's ``head.networks``) describes feed-forward networks that read
+    ``n_inputs`` values and whose ``columns`` cover the ``n_outputs`` outputs exactly once; a ``KeyError`` or
+    ``TypeError`` for a missing or mistyped field.
+    """
+    if not isinstance(networks, list) or not networks:
+        raise ValueError(f"networks must be a non-empty list, got {networks!r}")
+    covered = np.zeros(n_outputs, dtype=np.int64)
+    for i, network in enumerate(networks):
+        start, stop = network["columns"]
+        if not (type(start) is int and type(stop) is int and 0 <= start < stop <= n_outputs):
+            raise ValueError(f"network {i}: columns {network['columns']!r} must be [start, stop) within [0, {n_outputs}]")
+        covered[start:stop] += 1
+        size = n_inputs
+        layers = network["layers"]
+        if not isinstance(layers, list):
+            raise ValueError(f"network {i}: layers must be a list, got {layers!r}")
+        for j, layer in enumerate(layers):
+            size = _check_layer(layer, size, f"network {i}, layer {j}")
+        if size != stop - start:
+            raise ValueError(f"network {i} ends with {size} values for its {stop - start} columns {network['columns']}")
+    if not (covered == 1).all():
+        raise ValueError(
+            f"the networks' columns must cover each of the {n_outputs} outputs exactly once, got {covered.tolist()}"
+        )
+
+
+def _check_layer(layer: dict[str, Any], size: int, where: str) -> int:
+    """Check one layer reading ``size`` values; return how many it writes."""
+    kind = layer["type"]
+    if kind == "linear":
+        if not (type(layer["in"]) is int and type(layer["out"]) is int and layer["in"] == size and layer["out"] >= 1):
+            raise ValueError(f"{where}: a linear layer on {size} values needs in={size} and out >= 1, got {layer!r}")
+        return int(layer["out"])
+    if kind == "layernorm":
+        eps = layer["eps"]
+        if layer["size"] != size or type(layer["affine"]) is not bool or not (isinstance(eps, float) and 0 < eps < math.inf):
+            raise ValueError(
+                f"{where}: a layer norm on {size} values needs size={size}, eps > 0 and affine true/false, got {layer!r}"
+            )
+        return size
+    if kind == "activation":
+        function = layer["function"]
+        if function not in ACTIVATIONS:
+            raise ValueError(f"{where}: unknown activation {function!r} (known: {list(ACTIVATIONS)})")
+        if function == "leaky_relu" and not (isinstance(layer["slope"], float) and math.isfinite(layer["slope"])):
+            raise ValueError(f"{where}: leaky_relu needs a finite slope, got {layer!r}")
+        return size
+    raise ValueError(f"{where}: unknown layer type {kind!r} (known: {list(LAYER_TYPES)})")
+
+
+class NetworkForward:
+    """
+    The forward pass of a ``networks`` head: feed-forward networks over the scaled observation, each writing a range
+    of the ``A`` outputs (the only implementation of these formulas: the deep SarsaAAC policy trains on it,
+    ``model.predict`` and :class:`~sb3_aac.runtime.policy.RuntimePolicy` call it).
+
+    The input is ``x = (s - obs_mid) / obs_half`` (``D`` values, computed as ``s * a - b``). Network ``i`` applies its
+    layers in order to ``x`` and writes its last values to the outputs ``columns[0] .. columns[1] - 1``. Layers:
+
+    - ``linear``: ``y = W @ h + b`` with ``W = net{i}_{j}_weight`` ``(out, in)``, ``b = net{i}_{j}_bias`` ``(out,)``;
+    - ``layernorm``: ``y = (h - mean(h)) / sqrt(var(h) + eps)`` over the layer's values (``var`` the mean squared
+      deviation, as ``torch.nn.LayerNorm``), then ``* weight + bias`` if ``affine``;
+    - ``activation``: ``tanh``, ``relu`` (``max(h, 0)``) or ``leaky_relu`` (``h`` if ``h > 0``, else ``slope * h``).
+
+    :param obs_mid: ``(D,)`` input shift
+    :param obs_half: ``(D,)`` input scale (> 0)
+    :param networks: the header's ``head.networks`` (checked with :func:`check_networks`)
+    :param arrays: the layer arrays by name (:func:`network_array_shapes`); held as given (views), so in-place
+        updates are seen by the next call
+    :param n_outputs: ``A``
+    """
+
+    def __init__(
+        self,
+        obs_mid: np.ndarray,
+        obs_half: np.ndarray,
+        networks: list[dict[str, Any]],
+        arrays: dict[str, np.ndarray],
+        n_outputs: int,
+    ):
+        check_networks(networks, len(obs_mid), n_outputs)
+        self.n_outputs = n_outputs
+        self.set_input_scaling(obs_mid, obs_half)
+        self.networks = networks
+        self.columns = [tuple(network["columns"]) for network in networks]
+        # Per network, per layer: (type, weight or None, bias or None, eps or slope).
+        self.layers: list[list[tuple[str, np.ndarray | None, np.ndarray | None, float]]] = []
+        for i, network in enumerate(networks):
+            layers = []
+            for j, layer in enumerate(network["layers"]):
+                weight, bias = arrays.get(f"net{i}_{j}_weight"), arrays.get(f"net{i}_{j}_bias")
+                if layer["type"] == "activation":
+                    kind = layer["function"]
+                    constant = float(layer.get("slope", 0.0)) if kind == "leaky_relu" else 0.0
+                else:
+                    kind, constant = layer["type"], float(layer.get("eps", 0.0))
+                layers.append((kind, weight, bias, constant))
+            self.layers.append(layers)
+
+    def set_input_scaling(self, obs_mid: np.ndarray, obs_half: np.ndarray) -> None:
+        """Use new input scaling constants (e.g. updated observation statistics) from the next call on."""
+        self.feature_a = 1.0 / np.asarray(obs_half, dtype=np.float64)
+        self.feature_b = np.asarray(obs_mid, dtype=np.float64) * self.feature_a
+
+    def features(self, obs: np.ndarray) -> np.ndarray:
+        """Observations ``(n, D)`` -> scaled inputs ``(n, D)``."""
+        x: np.ndarray = obs * self.feature_a - self.feature_b
+        return x
+
+    def network(self, i: int, x: np.ndarray, cache: list[tuple[np.ndarray, ...]] | None = None) -> np.ndarray:
+        """
+        Network ``i`` on inputs ``(n, D)``: its outputs ``(n, stop - start)``. With ``cache``, one tuple per layer is
+        appended to it: the layer's input, and for a layer norm also ``(h - mean) / sqrt(var + eps)`` (before any
+        affine map) and ``1 / sqrt(var + eps)`` ``(n, 1)``: what a backward pass needs.
+        """
+        h = x
+        for kind, weight, bias, constant in self.layers[i]:
+            h_in = h
+            if kind == "linear":
+                h = h @ weight.T + bias  # type: ignore[union-attr]
+            elif kind == "layernorm":
+                # sum / size: ndarray.mean's Python-level overhead is most of the cost at these sizes.
+                centred = h - h.sum(-1, keepdims=True) / h.shape[-1]
+                inv_std = 1.0 / np.sqrt((centred * centred).sum(-1, keepdims=True) / h.shape[-1] + constant)
+                h = centred * inv_std
+                if cache is not None:
+                    cache.append((h_in, h, inv_std))
+                if weight is not None:
+                    h = h * weight + bias
+                continue
+            elif kind == "tanh":
+                h = np.tanh(h)
+            elif kind == "relu":
+                h = np.maximum(h, 0.0)
+            else:  # leaky_relu
+                h = np.where(h > 0.0, h, constant * h)
+            if cache is not None:
+                cache.append((h_in,))
+        return h
+
+    def outputs(self, x: np.ndarray) -> tuple[np.ndarray, None]:
+        """Scaled inputs ``(n, D)`` -> every output ``(n, A)`` (and None, as :meth:`BankForward.outputs` for a linear head)."""
+        out = np.empty((len(x), self.n_outputs))
+        for i, (start, stop) in enumerate(self.columns):
+            out[:, start:stop] = self.network(i, x)
+        return out, None

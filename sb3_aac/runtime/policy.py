@@ -13,8 +13,8 @@ import numpy as np
 
 from .actions import env_action, unscale, unscale_value
 from .format import BANK_ARRAYS, TILE_ARRAYS, check_array_values, read_policy_file
-from .forward import BankForward, TileForward
-from .kernel import act_kernel, kernel_arguments
+from .forward import BankForward, NetworkForward, TileForward
+from .kernel import act_kernel, kernel_arguments, network_kernel, network_kernel_arguments
 
 BACKENDS = ("auto", "numpy", "numba")  # how act() computes: numba if importable, or numpy only
 
@@ -58,10 +58,15 @@ class RuntimePolicy:
         slices = [self.type_slice(j) for j in range(k)]
         self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in slices]
         self._kernel_args: tuple[np.ndarray, ...] | None = None
+        if approx["head"]["type"] == "networks":
+            self._init_networks(approx, arrays, backend)
+            return
         if self.tiles:
             if backend == "numba":
                 raise ValueError("backend='numba' computes dense features only; tile-coding policies run with numpy ('auto')")
-            self._bank: BankForward | TileForward = TileForward(**{name: arrays[name] for name in TILE_ARRAYS})
+            self._bank: BankForward | TileForward | NetworkForward = TileForward(
+                **{name: arrays[name] for name in TILE_ARRAYS}
+            )
             self.rbf = self.mlp = False
             self.backend = "numpy"
             return
@@ -79,6 +84,23 @@ class RuntimePolicy:
                 active = np.empty(self._feature_buffer.size, dtype=np.int64)
                 self._params_buffer = np.empty(max(self.dims))  # the chosen type's parameters, written by the kernel
                 self._kernel_args = (pack, meta, self._feature_buffer.reshape(-1), active, self._params_buffer)
+        self.backend = "numpy" if self._kernel_args is None else "numba"
+
+    def _init_networks(self, approx: dict[str, Any], arrays: dict[str, np.ndarray], backend: str) -> None:
+        """Set up a ``networks`` head: :class:`NetworkForward`, and the numba kernel unless ``backend="numpy"``."""
+        self._bank = net = NetworkForward(
+            arrays["obs_mid"], arrays["obs_half"], approx["head"]["networks"], arrays, approx["n_outputs"]
+        )
+        self.rbf = self.mlp = False
+        if backend != "numpy":
+            kernel = network_kernel()
+            if kernel is None and backend == "numba":
+                raise ValueError("backend='numba' needs numba (pip install numba); use backend='numpy' or 'auto'")
+            if kernel is not None:
+                pack, meta, width = network_kernel_arguments(net, self.param_low, self.param_high, self.offsets)
+                self._kernel = kernel
+                self._params_buffer = np.empty(max(self.dims))
+                self._kernel_args = (pack, meta, np.empty((3, width)), np.empty(approx["n_outputs"]), self._params_buffer)
         self.backend = "numpy" if self._kernel_args is None else "numba"
 
     # ------------------------------------------------------------------ loading
@@ -146,7 +168,7 @@ class RuntimePolicy:
             if k < 0:
                 raise ValueError(f"The observation holds NaN or inf values: {x}")
             return self.type_start + k, self._params_buffer[:dim].astype(self.param_dtypes[k])
-        if isinstance(self._bank, TileForward):  # self.tiles
+        if isinstance(self._bank, (TileForward, NetworkForward)):
             out = self._bank.outputs(self._bank.features(self._observation(obs)[None]))[0][0].tolist()
         else:
             phi = self._bank.features(self._observation(obs), out=self._feature_buffer)

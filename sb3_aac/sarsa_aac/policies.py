@@ -1,7 +1,8 @@
 """
 SarsaAAC's policies: the abstract :class:`SarsaAACPolicy` (spaces, output layout, greedy ``predict``), the policies
 on a numpy bank of approximators (:class:`NumpyBankPolicy`): the dense banks of the paper (:class:`DenseBankPolicy`
-and its presets :class:`MlpPolicy`, :class:`RbfMlpPolicy`, :class:`RbfPolicy`) and tile coding (:class:`TilePolicy`).
+and its presets :class:`MlpPolicy`, :class:`RbfMlpPolicy`, :class:`RbfPolicy`), tile coding (:class:`TilePolicy`) and
+deep networks trained online (:class:`DeepPolicy`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from stable_baselines3.common.type_aliases import PyTorchObs
 from sb3_aac.common.observations import observation_batch
 from sb3_aac.common.spaces import ParameterizedActionSpec
 from sb3_aac.sarsa_aac.approximators import DEFAULT_RBF_WINDOW, ApproximatorBank, NumpyBank
+from sb3_aac.sarsa_aac.deep import DEFAULT_SPARSITY, DeepBank, check_net_arch
 from sb3_aac.sarsa_aac.kernels import Kernel
 from sb3_aac.sarsa_aac.tile_coding import TileBank
 
@@ -316,8 +318,8 @@ class TilePolicy(NumpyBankPolicy):
     Tile coding over groups of inputs with a linear output (:mod:`sb3_aac.sarsa_aac.tile_coding`; not in the paper):
     features that combine inputs, so values such as "heading relative to the target direction" are representable,
     still closed-form and sparse (training and decisions cost ``O(n_groups * n_tilings)`` per approximator).
-    The default groups, every input and every pair of inputs, need no knowledge of the inputs. The only policy that
-    learns with eligibility traces (SarsaAAC's ``trace_lambda > 0``).
+    The default groups, every input and every pair of inputs, need no knowledge of the inputs. Learns with
+    eligibility traces when SarsaAAC's ``trace_lambda > 0`` (as :class:`DeepPolicy` does).
 
     :param observation_space: A ``Box`` observation space with finite bounds (or give ``obs_bounds``)
     :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
@@ -356,5 +358,63 @@ class TilePolicy(NumpyBankPolicy):
             tile_groups=self.tile_groups,
             tiles_per_input=self.tiles_per_input,
             n_tilings=self.n_tilings,
+            obs_bounds=self.obs_bounds,
+        )
+
+
+class DeepPolicy(NumpyBankPolicy):
+    """
+    Deep networks trained online, one sample at a time (:mod:`sb3_aac.sarsa_aac.deep`; not in the paper): one
+    feed-forward network for the action-type actor (K outputs), one for the parameter actor (P outputs) and one for
+    the critic, each with the hidden layers ``linear -> layer norm -> leaky ReLU`` of Elsayed, Vasan & Mahmood 2024
+    (arXiv 2410.14606), sparse initialisation, online observation normalisation and overshooting-bounded (ObGD)
+    steps, with eligibility traces when SarsaAAC's ``trace_lambda > 0`` (the paper uses 0.8).
+
+    :param observation_space: A ``Box`` observation space (any shape; it is flattened; infinite bounds are fine)
+    :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
+    :param net_arch: hidden layer sizes of each network, each in ``[1, 4096]`` (default two of 64: the paper used
+        128, 64 keeps one exported decision within 10 us)
+    :param sparsity: share of zero input weights of each unit at initialisation, in ``[0, 1)`` (0.9, the paper's)
+    :param normalize_obs: normalise each input by the running mean and standard deviation of the training
+        observations (the paper's); if False, inputs are scaled from ``obs_bounds`` to ``[-1, 1]``
+    :param kappa: ObGD's overshooting factor, a finite number ``> 0`` (2.0, the paper's value for value networks)
+    :param obs_bounds: ``(low, high)`` for the scaling before the first observations (and always without
+        ``normalize_obs``); defaults to the observation space's bounds
+    """
+
+    approximators: DeepBank
+
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
+        net_arch: tuple[int, ...] | list[int] = (64, 64),
+        sparsity: float = DEFAULT_SPARSITY,
+        normalize_obs: bool = True,
+        kappa: float = 2.0,
+        obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    ):
+        super().__init__(observation_space, action_space, obs_bounds)
+        low, high = self.input_bounds()
+        if not isinstance(normalize_obs, (bool, np.bool_)):
+            raise ValueError(f"normalize_obs must be True or False, got {normalize_obs!r}")
+        self.net_arch, self.sparsity, self.normalize_obs, self.kappa = (
+            check_net_arch(net_arch),
+            sparsity,
+            bool(normalize_obs),
+            kappa,
+        )
+        self._set_approximators(
+            DeepBank(low, high, self.n_types, self.n_params, self.net_arch, sparsity, self.normalize_obs, kappa)
+        )
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        return dict(
+            observation_space=self.observation_space,
+            action_space=self.action_space,
+            net_arch=self.net_arch,
+            sparsity=self.sparsity,
+            normalize_obs=self.normalize_obs,
+            kappa=self.kappa,
             obs_bounds=self.obs_bounds,
         )

@@ -19,9 +19,10 @@ from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
 from sb3_aac.common.model_files import check_model_file, check_policy_class
 from sb3_aac.common.observations import observation_batch
+from sb3_aac.sarsa_aac.deep import DeepKernel, DeepTraces
 from sb3_aac.sarsa_aac.kernels import Kernel
 from sb3_aac.sarsa_aac.tile_coding import TileKernel, TileTraces
-from sb3_aac.sarsa_aac.policies import MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
+from sb3_aac.sarsa_aac.policies import DeepPolicy, MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
 
@@ -79,7 +80,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     - CACLA (van Hasselt & Wiering 2007) on the parameter actor: only if ``delta > 0``, the approximators of
       type ``k``'s parameters step toward the *executed* parameters ``p`` (in the scaled ``[-1, 1]`` space).
 
-    With ``trace_lambda > 0`` (TilePolicy only) the critic learns by TD(lambda) and the action-type actor by
+    With ``trace_lambda > 0`` (TilePolicy and DeepPolicy) the critic learns by TD(lambda) and the action-type actor by
     SARSA(lambda) (Sutton & Barto, 2nd ed., Sec. 12.2 and 12.7): each step's error also moves the earlier states
     (and types) of the episode in proportion to their eligibility traces, which decay by ``gamma * trace_lambda``
     per step; one trace per lane, zeroed where an episode ends (termination or truncation, after that step's
@@ -153,7 +154,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     :param param_noise_initial: Initial standard deviation of the Gaussian noise on the scaled parameters
     :param param_noise_final: Final standard deviation of the parameter noise
     :param trace_lambda: The eligibility-trace decay ``lambda`` in ``[0, 1]`` of the critic and the action-type
-        actor; 0 (the default) is the one-step update; ``> 0`` needs TilePolicy
+        actor; 0 (the default) is the one-step update; ``> 0`` needs TilePolicy or DeepPolicy
     :param replacing_traces: Replacing traces (a visited feature's trace is set to 1, and its traces of the
         other action types to 0) if True, accumulating traces (1 is added) if False
     :param info_keywords: Keys of ``info`` read at the step where an episode ends and logged as
@@ -177,6 +178,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     """
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {
+        "DeepPolicy": DeepPolicy,
         "MlpPolicy": MlpPolicy,
         "RbfMlpPolicy": RbfMlpPolicy,
         "RbfPolicy": RbfPolicy,
@@ -299,15 +301,15 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         # SB3 types policy_class as type[BasePolicy]; __init__ checked that it is a SarsaAACPolicy.
         self.policy = self.policy_class(self.observation_space, self.action_space, **self.policy_kwargs)  # type: ignore[assignment]
         self.policy = self.policy.to(self.device)
-        if self.trace_lambda > 0 and not isinstance(self.policy, TilePolicy):
+        if self.trace_lambda > 0 and not isinstance(self.policy, (TilePolicy, DeepPolicy)):
             raise ValueError(
-                f"trace_lambda > 0 (got {self.trace_lambda}) needs linear tile heads (TilePolicy); "
+                f"trace_lambda > 0 (got {self.trace_lambda}) needs linear tile heads (TilePolicy) or DeepPolicy; "
                 f"{type(self.policy).__name__} learns with one-step updates only (trace_lambda=0)"
             )
         # The action a' chosen at _last_obs and not yet executed: (obs (n, D), k (n,), scaled params (n, P)).
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         # The lanes' eligibility traces of the episodes under way (None with trace_lambda == 0 or before learn).
-        self._traces: TileTraces | None = None
+        self._traces: TileTraces | DeepTraces | None = None
         # Count and sum of squares of the lanes' discounted returns so far; return_scale = sqrt(sum / count).
         # Kept when load() calls this after restoring them (0 until the first non-zero reward).
         self._return_moments = getattr(self, "_return_moments", np.zeros(2))
@@ -410,6 +412,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         self._kernel = self.policy.rebind()
         if self._pending is None or self._last_obs is not obs_before:
             obs = self._last_obs.astype(np.float64).reshape(self.n_envs, -1)  # type: ignore[union-attr]
+            self._observe(obs)
             self._pending = (obs, *self._explore(self._kernel.forward(obs)[0]))
             self._traces = self._new_traces()  # new episodes
 
@@ -499,8 +502,9 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         else:
             batch = np.concatenate((obs, next_obs))
         rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
-        # Before the forward pass: it may put the weights into return units.
+        # Before the forward pass: it may put the weights into return units, and s' normalised with itself.
         self._track_return_scale(rewards, dones)
+        self._observe(next_obs)
         # One forward pass for s (weights as they are now), s' and the terminal observations.
         out, cache = kernel.forward(batch)
         if not math.isfinite(out.sum()):  # one reduction catches NaN and inf before an action is chosen from them
@@ -522,10 +526,15 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0.
         err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
         err[:, vi] = delta
-        if self._traces is None:
+        if isinstance(kernel, DeepKernel):
+            assert self._traces is None or isinstance(self._traces, DeepTraces)
+            kernel.update(cache, err, self._lr, self._hidden_gain, k, self._traces)
+            if any_done and self._traces is not None:
+                self._traces.clear(np.flatnonzero(dones))
+        elif self._traces is None:
             kernel.update(cache, err, self._lr, self._hidden_gain)
         else:
-            assert isinstance(kernel, TileKernel)  # checked in _setup_model
+            assert isinstance(kernel, TileKernel) and isinstance(self._traces, TileTraces)  # checked in _setup_model
             kernel.update_traced(cache, err, self._lr, self._trace_hits[k], self._traces)
             if any_done:
                 self._traces.clear(np.flatnonzero(dones))
@@ -586,11 +595,18 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
 
     # ------------------------------------------------------------------ statistics and logging
 
-    def _new_traces(self) -> TileTraces | None:
+    def _observe(self, obs: np.ndarray) -> None:
+        """Fold new observations ``(n, D)`` into a deep policy's running statistics (other policies keep none)."""
+        if isinstance(self.policy, DeepPolicy):
+            self.policy.approximators.observe(obs)
+
+    def _new_traces(self) -> TileTraces | DeepTraces | None:
         """Zero eligibility traces of the action-type actor and the critic, one per lane (None if ``trace_lambda == 0``)."""
         if self.trace_lambda == 0:
             return None
         policy = self.policy
+        if isinstance(policy, DeepPolicy):
+            return policy.approximators.new_traces(self.n_envs, self.gamma * self.trace_lambda)
         assert isinstance(policy, TilePolicy)  # checked in _setup_model
         columns = np.array([*range(policy.n_types), policy.value_index])
         # hit[k]: the columns whose trace the features of (s, k) set: Q_k and V.
