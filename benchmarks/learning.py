@@ -6,10 +6,21 @@ Learning targets of SarsaAAC: train each (task, policy) on several seeds and pri
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
     PYTHONPATH=.:envs python -m benchmarks.learning --only paper-tile --seeds 5 --steps 80000 --eval-every 5000
 
-The targets, one pair at a time (a full run is long), each with ``--seeds 5 --eval-every 10000``:
+The first targets, one pair at a time (a full run is long), each with ``--seeds 5 --eval-every 10000``:
 ``paper-tile`` (25 m within 5,000 episodes; metres at the budget), ``v19-tile`` (25.4 m), ``paper-mlp2`` and
 ``paper-rbfmlp2`` (16 m; add ``--steps`` for 40,000 and 15,000 episodes), ``paper-rbf50`` (25 m within 10,000
 episodes), ``nav-tile`` (0.9 success within 300k steps), ``platform-tile`` (0.98 mean return).
+
+The learner's targets (lane count, past the hand-coded dribbler), each with ``--seeds 5``:
+
+- past the hand-coded dribbler (``--vs-dribbler`` adds the dribbler's score on the same episodes and the one-sided
+  t-test of the seeds' scores above it): ``--only paper-tile --steps 5000000 --vs-dribbler`` (31 m),
+  ``--only v19-tile --steps 5000000 --vs-dribbler`` (25.4 m);
+- the lane count: ``--only paper-tile --n-envs 1``, ``--n-envs 16`` and ``--n-envs 256`` (150k steps: within 1.0 m
+  of each other, each 25 m); ``--only paperid-tile`` (``SarsaAAC("TilePolicy", "RoboCupDribblePaper-v0")``: one
+  lane, the registered id, 25 m) and ``--only paperid-rbf10`` (21 m);
+- ``--only platform-tile --steps 20000 --n-envs 4`` and ``--n-envs 16`` (0.98); ``--only platform-rbf10 --steps
+  300000`` (0.98); ``--only paper-mlp2 --steps 700000`` (16 m within 40,000 episodes).
 
 ``DeepPolicy`` (``deep``), one seed per process (``--first-seed``) so that seeds run side by side; TD3 through
 ``FlattenParameterizedAction`` makes 99 % on the navigation env after 60k steps (one lane)::
@@ -19,13 +30,15 @@ episodes), ``nav-tile`` (0.9 success within 300k steps), ``platform-tile`` (0.98
     python -m benchmarks.learning --only platform-deep --steps 20000 --set trace_lambda=0.8 --seeds 5
     python -m benchmarks.learning --only paper-deep --steps 150000 --set trace_lambda=0.8 --seeds 5
 
-Scores: the mean dribbled distance in metres over 500 greedy episodes on fresh players (the dribbling envs), the
-mean return over 200 greedy episodes (Platform-v0, the toy env), the greedy success rate over 500 episodes (the
+Scores: the mean dribbled distance in metres over the benchmark's final evaluation, 1,000 greedy episodes on fresh
+players (``benchmarks.presets.FINAL_SEED``, the episodes on which the hand-coded dribbler makes 30.7 m and 25.4 m),
+the mean return over 200 greedy episodes (Platform-v0, the toy env), the greedy success rate over 500 episodes (the
 navigation env). Each line prints the per-seed scores, their mean and their interquartile mean (IQM), the
 training episodes and env steps, and the training speed. Runs are single-threaded and seeded. The IQM's 95 % CI is a
 percentile bootstrap over seeds (10,000 resamples). With ``--eval-every N`` the greedy score is also measured every
 ``N`` env steps (on fewer episodes: 200 dribbling, 50 return, 200 navigation) and each line adds the training
 episodes at which every seed first reached the task's target, ``-`` for a seed that did not.
+``--n-envs`` sets the number of lanes (environments) of any task but ``paperid``.
 """
 
 from __future__ import annotations
@@ -50,6 +63,7 @@ from stable_baselines3.common.evaluation import evaluate_policy  # noqa: E402
 from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
 
 from sb3_aac import SarsaAAC, SelectObservation  # noqa: E402
+from benchmarks.presets import EVAL_SEED, FINAL_SEED  # noqa: E402
 from sb3_aac.common.checkpoints import GreedyCheckpoints  # noqa: E402
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv  # noqa: E402
 
@@ -64,15 +78,20 @@ POLICIES: dict[str, tuple[str, dict[str, Any]]] = {
 }
 
 
-def dribble_env(profile: str) -> Callable[[int], VecEnv]:
-    def make(seed: int) -> VecEnv:
+def dribble_env(profile: str) -> Callable[[int, int], VecEnv]:
+    def make(n_envs: int, seed: int) -> VecEnv:
         from robocup_dribble import DribbleVecEnv
 
-        env = DribbleVecEnv(16, profile=profile)
+        env = DribbleVecEnv(n_envs, profile=profile)
         env.seed(seed)
         return env
 
     return make
+
+
+def registered_id(env_id: str) -> Callable[[int, int], Any]:
+    """The registered id itself, as a new user passes it (SB3 wraps it into one lane); seeded through the model."""
+    return lambda n_envs, seed: env_id
 
 
 Score = Callable[[SarsaAAC, bool], float]  # (model, quick) -> greedy score; quick: fewer episodes
@@ -82,7 +101,9 @@ def dribble_score(profile: str) -> Score:
     def score(model: SarsaAAC, quick: bool) -> float:
         from robocup_dribble.evaluation import evaluate_dribbling
 
-        report = evaluate_dribbling(model, n_episodes=200 if quick else 500, profile=profile, seed=10_000)
+        report = evaluate_dribbling(
+            model, n_episodes=200 if quick else 1000, profile=profile, seed=EVAL_SEED if quick else FINAL_SEED
+        )
         return float(np.mean(report.distances))
 
     return score
@@ -115,32 +136,33 @@ def navigation_success(model: SarsaAAC, quick: bool) -> float:
     return successes / episodes
 
 
-def vec(env_class: type, n_envs: int) -> Callable[[int], VecEnv]:
-    return lambda seed: make_vec_env(env_class, n_envs=n_envs, seed=seed)
+def vec(env_class: type) -> Callable[[int, int], VecEnv]:
+    return lambda n_envs, seed: make_vec_env(env_class, n_envs=n_envs, seed=seed)
 
 
 def toy(n_envs: int, seed: int) -> VecEnv:
     return make_vec_env(ParameterizedTargetEnv, n_envs=n_envs, seed=seed)
 
 
-# name: (make env from seed, training steps, SarsaAAC keyword arguments, score)
-TASKS: dict[str, tuple[Callable[[int], VecEnv], int, dict[str, Any], Score]] = {
-    "paper": (dribble_env("v11"), 150_000, {}, dribble_score("v11")),
-    "v19": (dribble_env("v19"), 150_000, {}, dribble_score("v19")),
-    "platform": (lambda seed: platform_env(16, seed), 100_000, {"info_keywords": ()}, mean_return(platform_env, 200)),
-    "nav": (vec(NavigationEnv, 16), 300_000, {"info_keywords": ()}, navigation_success),
-    "nav1": (vec(NavigationEnv, 1), 60_000, {"info_keywords": ()}, navigation_success),
-    "toy": (lambda seed: toy(4, seed), 20_000, {}, mean_return(toy, 200)),
+# name: (make env from (lanes, seed), default lanes, training steps, SarsaAAC keyword arguments, score)
+TASKS: dict[str, tuple[Callable[[int, int], Any], int, int, dict[str, Any], Score]] = {
+    "paper": (dribble_env("v11"), 16, 150_000, {}, dribble_score("v11")),
+    "paperid": (registered_id("RoboCupDribblePaper-v0"), 1, 150_000, {}, dribble_score("v11")),
+    "v19": (dribble_env("v19"), 16, 150_000, {}, dribble_score("v19")),
+    "platform": (platform_env, 16, 100_000, {"info_keywords": ()}, mean_return(platform_env, 200)),
+    "nav": (vec(NavigationEnv), 16, 300_000, {"info_keywords": ()}, navigation_success),
+    "nav1": (vec(NavigationEnv), 1, 60_000, {"info_keywords": ()}, navigation_success),
+    "toy": (toy, 4, 20_000, {}, mean_return(toy, 200)),
 }
 
 
 # The greedy score each task's target asks for; the paper's MLP policies are asked for 16 m.
-TARGETS = {"paper": 25.0, "v19": 25.4, "platform": 0.98, "nav": 0.9, "nav1": 0.9, "toy": 9.0}
+TARGETS = {"paper": 25.0, "paperid": 25.0, "v19": 25.4, "platform": 0.98, "nav": 0.9, "nav1": 0.9, "toy": 9.0}
 MLP_PAPER_TARGET = 16.0
 
 
 def target(task: str, policy_name: str) -> float:
-    return MLP_PAPER_TARGET if task == "paper" and policy_name in ("mlp2", "rbfmlp2") else TARGETS[task]
+    return MLP_PAPER_TARGET if task.startswith("paper") and policy_name in ("mlp2", "rbfmlp2") else TARGETS[task]
 
 
 def iqm(values: list[float]) -> float:
@@ -169,6 +191,19 @@ class TargetWatch(GreedyCheckpoints):
         return True
 
 
+def dribbler_score(task: str) -> float:
+    """The hand-coded dribbler's score on the final evaluation's episodes of a dribbling task."""
+    from robocup_dribble.dribbler import HandCodedDribbler
+
+    profile = "v19" if task == "v19" else "v11"
+    return TASKS[task][4](HandCodedDribbler(profile=profile), False)  # type: ignore[arg-type]
+
+
+def above(scores: list[float], reference: float) -> float:
+    """One-sided p-value of Student's t-test that the seeds' mean score exceeds ``reference``."""
+    return float(stats.ttest_1samp(scores, reference, alternative="greater").pvalue)
+
+
 def run(
     task: str,
     policy_name: str,
@@ -177,8 +212,11 @@ def run(
     rate: float | None,
     settings: dict[str, Any],
     eval_every: int | None = None,
+    n_envs: int | None = None,
+    vs_dribbler: bool = False,
 ) -> None:
-    make_env, budget, kwargs, score = TASKS[task]
+    make_env, lanes, budget, kwargs, score = TASKS[task]
+    lanes = n_envs or lanes
     if rate is not None:
         kwargs = {**kwargs, "learning_rate": rate, "q_learning_rate": rate, "param_learning_rate": rate}
     kwargs = {**kwargs, **settings}
@@ -186,7 +224,7 @@ def run(
     budget = steps or budget
     scores, episodes, speeds, reached = [], [], [], []
     for seed in seeds:
-        model = SarsaAAC(policy, make_env(seed), seed=seed, policy_kwargs=policy_kwargs, **kwargs)
+        model = SarsaAAC(policy, make_env(lanes, seed), seed=seed, policy_kwargs=policy_kwargs, **kwargs)
         watch = TargetWatch(score, eval_every, target(task, policy_name)) if eval_every else None
         start = time.perf_counter()
         model.learn(budget, callback=watch, log_interval=None)
@@ -199,14 +237,17 @@ def run(
     extra = "".join(f" {key}={value}" for key, value in settings.items())
     low, high = iqm_ci(scores)
     line = (
-        f"{task:9s} {policy_name:8s} rate={rate or 'default'}{extra} steps={budget:>7d} episodes~{int(np.mean(episodes)):>6d} "
-        f"scores={[round(s, 3) for s in scores]} mean={np.mean(scores):.3f} iqm={iqm(scores):.3f} "
-        f"ci95=[{low:.3f}, {high:.3f}]"
+        f"{task:9s} {policy_name:8s} lanes={lanes} rate={rate or 'default'}{extra} steps={budget:>7d} "
+        f"episodes~{int(np.mean(episodes)):>6d} scores={[round(s, 3) for s in scores]} mean={np.mean(scores):.3f} "
+        f"iqm={iqm(scores):.3f} ci95=[{low:.3f}, {high:.3f}]"
     )
+    if vs_dribbler:
+        reference = dribbler_score(task)
+        line += f" dribbler={reference:.3f} p(mean > dribbler)={above(scores, reference):.3g}"
     if eval_every:
         line += f" episodes_to_{target(task, policy_name)}={['-' if e is None else e for e in reached]}"
     else:
-        line += f" train={np.mean(speeds) / 1e3:.0f}k steps/s"
+        line += f" train={np.mean(speeds) / 1e3:.1f}k steps/s"
     print(line, flush=True)
 
 
@@ -223,6 +264,10 @@ def main() -> None:
     parser.add_argument("--first-seed", type=int, default=0, help="seeds first-seed .. first-seed + seeds - 1")
     parser.add_argument("--steps", type=int, default=None, help="override every task's training steps")
     parser.add_argument("--eval-every", type=int, default=None, help="env steps between greedy checks of the target")
+    parser.add_argument("--n-envs", type=int, default=None, help="lanes (environments), instead of the task's")
+    parser.add_argument(
+        "--vs-dribbler", action="store_true", help="dribbling tasks: the hand-coded dribbler's score and a one-sided test"
+    )
     parser.add_argument("--rate", type=float, default=None, help="set the three learning rates (default: SarsaAAC's)")
     parser.add_argument(
         "--set", nargs="*", default=[], metavar="KEY=VALUE", help="SarsaAAC keyword arguments (Python literals)"
@@ -234,8 +279,10 @@ def main() -> None:
         task, policy_name = pair.split("-")
         if task not in TASKS or policy_name not in POLICIES:
             raise SystemExit(f"unknown pair {pair!r}: tasks {list(TASKS)}, policies {list(POLICIES)}")
+        if args.vs_dribbler and task not in ("paper", "paperid", "v19"):
+            raise SystemExit(f"--vs-dribbler needs a dribbling task, got {task!r}")
         seeds = list(range(args.first_seed, args.first_seed + args.seeds))
-        run(task, policy_name, seeds, args.steps, args.rate, settings, args.eval_every)
+        run(task, policy_name, seeds, args.steps, args.rate, settings, args.eval_every, args.n_envs, args.vs_dribbler)
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import torch as th
 
-from sb3_aac.sarsa_aac.approximators import ApproximatorBank, rbf_layout, step_normalisers
+from sb3_aac.sarsa_aac.approximators import ApproximatorBank, rbf_layout
 
 CONFIGS = {
     "mlp": dict(n_rbf=None, hidden_units=5),
@@ -145,8 +145,8 @@ def test_kernel_views_follow_load_state_dict_and_moves():
     [
         (dict(low=np.array([-np.inf, 0]), high=np.array([1, 1]), n_rbf=5), "RBF features need finite bounds"),
         (dict(low=np.array([1, 0]), high=np.array([1, 1])), "Need low < high"),
-        (dict(low=np.zeros(2), high=np.ones(2), hidden_units=0), "hidden_units must be >= 1"),
-        (dict(low=np.zeros(2), high=np.ones(2), n_rbf=0), "n_rbf must be >= 1"),
+        (dict(low=np.zeros(2), high=np.ones(2), hidden_units=0), "hidden_units must be a whole number >= 1"),
+        (dict(low=np.zeros(2), high=np.ones(2), n_rbf=0), "n_rbf must be a whole number >= 1"),
         (dict(low=np.zeros(2), high=np.ones(2), n_rbf=3, rbf_width=0.0), "rbf_width must be > 0"),
     ],
 )
@@ -163,7 +163,7 @@ def test_infinite_bounds_without_rbf_pass_inputs_unscaled():
 @pytest.mark.parametrize("n_rbf", [None, 10])
 @pytest.mark.parametrize("n", [1, 256])
 def test_rate_one_lands_identical_samples_on_target(n_rbf, n):
-    """n copies of one sample: the batch normalisation averages them, so a rate of 1 lands on the target (not n times past)."""
+    """n copies of one sample: the first lands on the target with a rate of 1, the others then have nothing left to move."""
     bank = ApproximatorBank(LOW, HIGH, 2, n_rbf=n_rbf)
     kernel = bank.numpy_kernel()
     obs = np.tile([[0.3, 1.2, -2.0]], (n, 1))
@@ -172,14 +172,24 @@ def test_rate_one_lands_identical_samples_on_target(n_rbf, n):
     np.testing.assert_allclose(kernel.forward(obs[:1])[0], out[:1] + np.array([[1.0, -3.0]]), atol=1e-12)
 
 
-def test_disjoint_samples_keep_their_own_weight_steps():
-    """RBF features far apart barely overlap: their weight steps are not shrunk; the shared bias step is averaged."""
-    bank = ApproximatorBank(np.zeros(1), np.ones(1), 1, n_rbf=50, rbf_width=0.5)
-    x = bank.numpy_kernel().features(np.array([[0.0], [1.0]]))
-    weights, bias = step_normalisers(x)
-    w = 1 / (1 + (x * x).sum(1))
-    np.testing.assert_allclose(weights, w, rtol=1e-6)
-    np.testing.assert_allclose(bias, w / (w.sum() / (1 - (w * (x * x).sum(1)).mean())))
+@pytest.mark.parametrize("name", CONFIGS)
+def test_a_batch_takes_its_samples_one_after_another(name):
+    """n lanes at once take the steps of n one-sample updates, each toward its target fixed before the batch."""
+    rng = np.random.default_rng(4)
+    obs = rng.uniform(LOW, HIGH, (5, 3))
+    obs[3] = obs[1]
+    err = rng.standard_normal((5, 4))
+    lr = np.array([0.1, 0.5, 1.0, 0.3])
+    batch, single = make_bank(name), make_bank(name)
+    single.load_state_dict(batch.state_dict())
+    targets = batch.evaluate(obs) + err
+    batch.numpy_kernel().update(batch.numpy_kernel().forward(obs)[1], err, lr)
+    kernel = single.numpy_kernel()
+    for i in range(len(obs)):
+        out, cache = kernel.forward(obs[i : i + 1])
+        kernel.update(cache, targets[i : i + 1] - out, lr)
+    for (key, value), other in zip(batch.state_dict().items(), single.state_dict().values(), strict=True):
+        np.testing.assert_allclose(value.numpy(), other.numpy(), rtol=1e-10, atol=1e-12, err_msg=key)
 
 
 @pytest.mark.parametrize("n_rbf", [7, 30, 50, 80])

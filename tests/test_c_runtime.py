@@ -91,6 +91,8 @@ def policy_kinds() -> dict[str, tuple[str, str, dict]]:
         for layout in LAYOUTS:
             if policy == "TilePolicy":
                 kwargs: dict = {"tiles_per_input": 5, "n_tilings": 3}
+            elif policy == "DeepPolicy":
+                kwargs = {"net_arch": [8, 8]}
             else:
                 kwargs = {"n_rbf": 7 if policy != "MlpPolicy" else None, "hidden_units": None if policy == "RbfPolicy" else 4}
             kinds[f"{policy}-{layout}"] = (policy, layout, kwargs)
@@ -380,7 +382,7 @@ def network_cases(folder: Path) -> list[tuple[str, bytes, str | None]]:
 
     def rbf_features(h):
         d = h["observation"]["size"]
-        h["approximators"]["features"] = {"type": "rbf", "n_rbf": 2, "rbf_width": 1.0, "n_features": 2 * d}
+        h["approximators"]["features"] = {"type": "rbf", "n_rbf": 2, "rbf_window": 5.0, "n_features": 2 * d}
 
     edit("rbf features", rbf_features, "scaled features")
     return cases

@@ -106,9 +106,13 @@ def greedy_return(model):
 
 @pytest.mark.parametrize("replacing", [True, False])
 def test_learns_toy_env_with_traces(replacing):
+    # The toy env's short run wants bolder steps than the defaults (0.1): 0.3, as in test_sarsa_aac_learning.
     model = SarsaAAC(
         "TilePolicy",
         make_vec_env(ParameterizedTargetEnv, n_envs=4, seed=0),
+        learning_rate=0.3,
+        q_learning_rate=0.3,
+        param_learning_rate=0.3,
         trace_lambda=0.7,
         replacing_traces=replacing,
         seed=0,

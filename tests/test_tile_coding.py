@@ -28,7 +28,7 @@ def test_layout_and_active_features():
 
 @pytest.mark.parametrize("n", [1, 64])
 def test_rate_one_lands_identical_samples_on_target(n):
-    """One sample, or n copies of it: the batch normalisation makes a rate of 1 land on the target, not n times past."""
+    """One sample, or n copies of it: a rate of 1 lands on the target, not n times past (the copies are taken in turn)."""
     bank = TileBank(-np.ones(3), np.ones(3), 2)
     kernel = bank.numpy_kernel()
     obs = np.tile([[0.3, -0.2, 0.9]], (n, 1))

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import ast
-import importlib.util
-import json
 import os
 import shlex
 import signal
@@ -38,7 +36,6 @@ from sb3_aac.tune import (  # noqa: E402
     train_command,
     zoo_entry,
 )
-from sb3_aac.tune.zoo import convert_sarsa_aac_params, sample_sarsa_aac_params  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TOY = "sb3_aac/ParameterizedTarget-v0"
@@ -342,25 +339,3 @@ def test_two_processes_share_one_journal_study(tmp_path: Path) -> None:
     trials = stored_trials(storage)
     assert 4 <= len(trials) <= 5  # each process stops once the study holds 4; both may be mid-trial then
     assert [t.number for t in trials] == list(range(len(trials))) and all(t.state == TrialState.COMPLETE for t in trials)
-
-
-def test_rl_zoo3_sampler_is_registered_and_samples_valid_kwargs() -> None:
-    pytest.importorskip("rl_zoo3", reason="rl-zoo3 is not installed (pip install rl_zoo3)")
-    spec = importlib.util.spec_from_file_location("rl_zoo3_train", ROOT / "examples" / "rl_zoo3_train.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    module.register()
-    import rl_zoo3.exp_manager
-
-    assert rl_zoo3.exp_manager.HYPERPARAMS_SAMPLER["sarsa_aac"] is sample_sarsa_aac_params
-    assert rl_zoo3.exp_manager.HYPERPARAMS_CONVERTER["sarsa_aac"] is convert_sarsa_aac_params
-    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=1))
-    policies = set()
-    for _ in range(6):
-        trial = study.ask()
-        kwargs = sample_sarsa_aac_params(trial, n_actions=0, n_envs=2, additional_args={})
-        assert convert_sarsa_aac_params(trial.params) == kwargs  # what rl-zoo3 uses to reload a trial
-        policies.add(kwargs["policy"])
-        SarsaAAC(env=toy_envs(2, 0), seed=0, info_keywords=(), **kwargs).learn(20)
-    assert len(policies) > 1
-    json.dumps(study.trials[0].params)  # storable in any Optuna storage

@@ -18,7 +18,8 @@ from typing import Any
 
 from sb3_aac.cli.arguments import CliError, add_trust_argument, seed_int
 from sb3_aac.cli.bench import add_bench_command
-from sb3_aac.cli.envs import PROFILE_ENV_IDS, register_toy_env
+from sb3_aac.cli.envs import PROFILE_ENV_IDS
+from sb3_aac.common.envs import register_toy_env
 from sb3_aac.cli.evaluate import add_evaluate_commands
 from sb3_aac.cli.export import add_c_header_command, add_export_command
 from sb3_aac.cli.models import hyperparameters

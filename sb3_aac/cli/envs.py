@@ -7,17 +7,10 @@ from typing import Any
 
 from robocup_dribble import ENV_PROFILES
 from sb3_aac.cli.arguments import CliError
+from sb3_aac.common.envs import TOY_ENV_ID, register_toy_env
 
 DRIBBLE_IDS = ENV_PROFILES  # dribbling env id -> server profile (the one table, robocup_dribble's)
 PROFILE_ENV_IDS = {profile: env_id for env_id, profile in DRIBBLE_IDS.items()}
-TOY_ENV_ID = "sb3_aac/ParameterizedTarget-v0"
-
-
-def register_toy_env() -> None:
-    import gymnasium as gym
-
-    if TOY_ENV_ID not in gym.registry:
-        gym.register(TOY_ENV_ID, entry_point="sb3_aac.common.envs:ParameterizedTargetEnv")
 
 
 def import_gym_packages(names: list[str]) -> None:

@@ -73,8 +73,8 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
     (as DQN), and Gaussian or Ornstein-Uhlenbeck noise on the scaled parameters; before ``learning_starts`` the
     actions are uniformly random. Time-limit truncations bootstrap from the terminal observation
     (``replay_buffer_kwargs=dict(handle_timeout_termination=...)``). Envs offering the array path
-    (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; callbacks then see ``dones``,
-    ``rewards``, ``new_obs``, ``k`` and ``params`` in their locals, but ``infos`` and ``actions`` are None.
+    (:func:`sb3_aac.common.array_env.array_path`) are stepped with arrays; the callbacks' locals are the same on
+    both paths (see :mod:`sb3_aac.common.array_env`), plus ``k`` and ``params``.
 
     :param policy: The policy model to use (MlpPolicy, or a PDQNPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)

@@ -21,15 +21,15 @@ The three function approximators of Uc-Cetina (2013, Sec. 4.2) are the configura
 (``n_rbf=None``, ``H``) (MLP), (``m``, ``H``) (MLP with an RBF filter layer) and (``m``, ``None``) (RBF arrays).
 
 Training is gradient descent on ``0.5 * err**2`` with *normalised* step sizes (chosen by us; the paper gives none),
-for a batch of ``n`` samples (one per environment) at once:
+one sample at a time:
 
 - per sample, each layer's step is divided by ``1 + ||input of that layer||**2`` (normalised LMS). For one sample
   and a linear head a learning rate of 1 moves the output all the way to its target, whatever the number of
   features, so the default rates work for 10, 30 or 50 RBFs per input alike;
-- the batch's summed steps are divided by factors that bound how much the samples' steps add up along shared
-  directions (:func:`step_normalisers`), for the weights and for the bias (which every sample shares) apart:
-  1 for one sample, ``n`` for ``n`` identical samples, and for the weights 1 when the samples' features do not
-  overlap. So the summed step is non-expansive for any rate in ``(0, 1]`` whatever the number of lanes.
+- a batch of ``n`` samples (one per lane) is applied one sample after another, in lane order, each sample's error
+  recomputed on the weights its predecessors left (:mod:`sb3_aac.sarsa_aac.lane_steps`): ``n`` lanes take the steps
+  one lane would take on the same samples, so what a sample teaches does not depend on the number of lanes, and no
+  linear head's step overshoots its sample's target for any rate in ``(0, 1]``.
 
 The parameters are torch tensors (so SB3's ``state_dict``-based save/load keeps working), but every computation is
 numpy on the CPU: the forward pass is :class:`sb3_aac.runtime.forward.BankForward`, the one implementation of the
@@ -50,6 +50,7 @@ from torch import nn
 from sb3_aac.common.sizes import check_allocation, is_whole
 from sb3_aac.runtime.forward import BankForward, check_rbf_window
 from sb3_aac.sarsa_aac.kernels import ForwardPass, NumpyKernel
+from sb3_aac.sarsa_aac.lane_steps import linear_steps, mlp_steps
 
 # RBFs farther than this many standard deviations from the input are not computed (0): below exp(-12.5) = 3.7e-6.
 DEFAULT_RBF_WINDOW = 5.0
@@ -262,7 +263,8 @@ class BankKernel(BankForward):
 
     def update(self, cache: BankCache, err: np.ndarray, lr: np.ndarray, hidden_gain: np.ndarray | None = None) -> None:
         """
-        One batch-normalised gradient step on ``0.5 * err**2`` (see the module docstring), in place.
+        A gradient step on ``0.5 * err**2`` for each sample in turn, in place (see the module docstring and
+        :mod:`sb3_aac.sarsa_aac.lane_steps`).
 
         :param cache: from :meth:`forward` on the same weights; its first ``n`` rows are used
         :param err: ``(n, A)`` target minus output; 0 leaves an approximator unchanged for that sample
@@ -272,53 +274,9 @@ class BankKernel(BankForward):
             hidden layer moves as if its targets were divided by ``sigma`` (see :class:`sb3_aac.SarsaAAC`).
         """
         n = len(err)
-        x = cache.x[:n]
-        g = err * lr  # (n, A)
+        x, err = np.ascontiguousarray(cache.x[:n]), np.ascontiguousarray(err, dtype=np.float64)
         if not self.mlp:
-            weights, bias = step_normalisers(x)
-            self.w += (g * weights[:, None]).T @ x
-            self.b += (g * bias[:, None]).sum(0)
+            linear_steps(self.w, self.b, x, err, lr)
             return
-        if cache.hidden is None:
-            raise ValueError("An MLP bank's update needs the hidden activations of its forward pass, the cache has none")
-        h = cache.hidden[:n]  # (n, A, H)
-        x_weights, x_bias = step_normalisers(x)
-        # Backpropagate through the old output weights before changing them.
-        g_hidden = g if hidden_gain is None else g * hidden_gain
-        g_hidden = (g_hidden[:, :, None] * self.w2) * (1.0 - h * h)  # (n, A, H)
-        h_weights, h_bias = step_normalisers(h)  # (n, A) each
-        self.w2 += np.einsum("na,nah->ah", g * h_weights, h)
-        self.b2 += (g * h_bias).sum(0)
-        self.w1_flat += (g_hidden.reshape(n, -1) * x_weights[:, None]).T @ x
-        self.b1_flat += (g_hidden.reshape(n, -1) * x_bias[:, None]).sum(0)
-
-
-def step_normalisers(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """
-    Per-sample factors of a layer's weight step and bias step for a batch of that layer's inputs.
-
-    For inputs ``x`` ``(n, ..., F)`` (one layer input per sample, and per approximator if there are middle axes),
-    with ``w_i = 1 / (1 + ||x_i||**2)`` (normalised LMS), the weight step of sample ``i`` is scaled by
-    ``w_i / c_w`` and its bias step by ``w_i / c_b``, where, with ``alpha = mean_i w_i ||x_i||**2`` (the weights'
-    share of a single sample's step; the bias has the rest, ``w_i``),
-
-    - ``c_w = max(1, G_w / alpha)``, ``G_w = max_i sqrt(w_i) |x_i| . sum_j sqrt(w_j) |x_j|``: Gershgorin's bound on
-      the largest eigenvalue of the batch's normalised Gram matrix ``sqrt(w_i w_j) x_i . x_j``;
-    - ``c_b = max(1, sum_j w_j / (1 - alpha))``: that eigenvalue for the bias's constant input.
-
-    The largest eigenvalue of the whole batch step is then at most ``alpha + (1 - alpha) = 1`` times the rate, so
-    the summed step is non-expansive for rates in ``(0, 1]`` whatever ``n`` and ``F``. For one sample both factors
-    are 1 (plain normalised LMS); ``n`` identical samples are averaged; samples with disjoint features keep their
-    own weight steps, and share the bias's.
-
-    :return: weight factors and bias factors, each of shape ``x.shape[:-1]``
-    """
-    energy = np.einsum("...f,...f->...", x, x)
-    w = 1.0 / (1.0 + energy)
-    root = np.sqrt(w)
-    scaled = np.abs(x) * root[..., None]
-    gram_row_sums = np.einsum("n...f,...f->n...", scaled, scaled.sum(0))
-    alpha = (w * energy).sum(0) / len(w)  # mean(0), without its Python-level overhead
-    weight_batch = np.maximum(np.divide(gram_row_sums.max(0), alpha, out=np.ones_like(alpha), where=alpha > 0), 1.0)
-    bias_batch = np.maximum(w.sum(0) / (1.0 - alpha), 1.0)
-    return w / weight_batch, w / bias_batch
+        gain = np.ones(len(lr)) if hidden_gain is None else hidden_gain
+        mlp_steps(self.w1, self.b1, self.w2, self.b2, x, err, lr, gain)

@@ -34,7 +34,8 @@ class Kernel(Protocol[CacheT]):
         :param cache: the cache of :meth:`forward`; only its first ``n = len(err)`` rows are used
         :param err: ``(n, A)`` target minus output; a 0 leaves that output unchanged for that sample
         :param lr: ``(A,)`` learning rate of each output, in ``(0, 1]``: normalised, so that for one sample a rate of
-            1 moves a linear output onto its target, and a batch's summed step is non-expansive
+            1 moves a linear output onto its target; a numpy bank applies a batch's samples one after another
+            (:mod:`sb3_aac.sarsa_aac.lane_steps`), so the lane count does not change what a sample teaches
         :param hidden_gain: ``(A,)`` factor on the step of each output's hidden layers (None: 1), the
             ``1 / return_scale**2`` of the Q and V outputs (see :class:`~sb3_aac.SarsaAAC`); ignored by a core
             without hidden layers

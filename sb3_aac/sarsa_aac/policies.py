@@ -8,7 +8,7 @@ deep networks trained online (:class:`DeepPolicy`).
 from __future__ import annotations
 
 from abc import abstractmethod
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch as th
@@ -45,6 +45,9 @@ class SarsaAACPolicy(BasePolicy):
     :param obs_bounds: ``(low, high)`` of the (flattened) observation for the family's input scaling; defaults to the
         observation space's bounds
     """
+
+    # SarsaAAC's learning rates when none is given: the step each family was tuned with (see SarsaAAC's docstring).
+    default_learning_rate: ClassVar[float] = 0.1
 
     def __init__(
         self,
@@ -383,6 +386,8 @@ class DeepPolicy(NumpyBankPolicy):
     """
 
     approximators: DeepBank
+    # SarsaAAC's rates are ObGD's step size alpha here; its figures in docs/sarsa_aac.md were measured with 0.5.
+    default_learning_rate: ClassVar[float] = 0.5
 
     def __init__(
         self,

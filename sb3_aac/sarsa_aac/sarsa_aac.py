@@ -98,10 +98,14 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     progress rather than at every step; the episode schedule at every episode end.
 
     Every approximator takes normalised steps (see :mod:`sb3_aac.sarsa_aac.approximators`): for one sample a learning
-    rate of 1 moves a linear approximator's output onto its target, and for a batch of lanes the summed step is
-    divided by a bound on how much the lanes' steps add up, so any rate in ``(0, 1]`` is stable whatever the number
-    of lanes or features. Rates are validated to lie in ``[0, 1]``; 0 freezes an approximator (as rl-zoo3's ``enjoy``
-    loads a model only to act, with ``custom_objects={"learning_rate": 0.0}``).
+    rate of 1 moves a linear approximator's output onto its target, and the lanes' samples of one env step are
+    applied one after another, each error recomputed on the weights the earlier lanes left
+    (:mod:`sb3_aac.sarsa_aac.lane_steps`). So ``n`` lanes take the steps one lane would take on their ``n`` samples
+    (the targets bootstrapped from the weights at the start of the env step): a rate means the same per sample
+    whatever the number of lanes, so the learning curve per env step changes with the lane count only through the
+    order and the correlation of the samples (measured in ``docs/sarsa_aac.md``). Rates are validated to lie in
+    ``[0, 1]``; 0 freezes an approximator (as rl-zoo3's ``enjoy`` loads a model only to act, with
+    ``custom_objects={"learning_rate": 0.0}``).
 
     Reward units do not matter: ``return_scale`` is the root mean square of the lanes' discounted returns
     (``G <- gamma * G + r``, reset at episode ends) over all steps so far. When it first becomes non-zero, the
@@ -123,12 +127,14 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     update.
 
     The paper gives no numbers for any hyperparameter; every default below was chosen by us. The learning rates
-    (0.5) were chosen among 0.1, 0.3, 0.5 and 1.0 by the greedy scores of ``benchmarks/learning.py`` (one seed) on
-    the toy env and RoboCupDribblePaper-v0 with RBF and tile policies: 0.5 was the best or within 10 % of it on
-    each, while 1.0 lost 40 % with tiles on the toy env and 0.1 lost half the distance with RBFs on the paper env.
-    MLP(2) on the paper env did better with 1.0 (20.4 m after 200k steps against 16.7 m after 150k with 0.5).
+    (0.1, per sample) were chosen among 0.05, 0.1, 0.2, 0.3 and 0.5 by the greedy scores of ``benchmarks/learning.py``
+    (seed 0; figures in ``docs/sarsa_aac.md``): TilePolicy on RoboCupDribblePaper-v0 after 150k steps on one lane made
+    24.7, 26.4 and 26.1 m with 0.05, 0.1 and 0.2 (15.9 m with 0.5); RbfPolicy 22.7 m with 0.1 and 20.5 m with 0.3
+    (16 lanes); MLP(2) 18.6 m with 0.1 and 4.1 m with 0.5 (300k steps); TilePolicy on Platform-v0 1.000 after 20k
+    steps on 4 and on 16 lanes. The toy env wants bolder steps (9.3 with 0.3, 7.2 with 0.1 after 20k steps).
     ``trace_lambda`` (0) and ``exploration_episodes`` (None) stay off because neither won across tasks, measured with
-    TilePolicy, 5 seeds, IQM of the greedy scores (``benchmarks/learning.py``; full figures in ``docs/sarsa_aac.md``):
+    the earlier batch rule (the lanes' summed steps divided by a bound on their overlap, rates 0.5) and TilePolicy,
+    5 seeds, IQM of the greedy scores (``benchmarks/learning.py``; full figures in ``docs/sarsa_aac.md``):
     ``trace_lambda=0.7`` gave 25.5 against 24.7 m on RoboCupDribblePaper-v0 after 80k steps, 0.999 against 0.995
     success on the navigation env (300k) and 21.8 m on RoboCupDribble-v0 (150k) either way, for several times the
     cost per step; ``exploration_episodes=1000`` gave 25.9 against 24.7 m on the paper env after 80k steps (25 m within
@@ -139,7 +145,9 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         SarsaAACPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
     :param learning_rate: Critic learning rate (normalised, in ``[0, 1]``), or a schedule of the progress
-        remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``
+        remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``; None (the default) takes the policy's
+        ``default_learning_rate`` (0.1 per sample for the linear and MLP families, 0.5 for DeepPolicy's ObGD step),
+        as do the other two rates
     :param q_learning_rate: Action-type actor learning rate, or a schedule
     :param param_learning_rate: Parameter actor learning rate, or a schedule
     :param gamma: The discount factor
@@ -196,9 +204,9 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         self,
         policy: str | type[SarsaAACPolicy],
         env: GymEnv | str | None,
-        learning_rate: float | Schedule = 0.5,
-        q_learning_rate: float | Schedule = 0.5,
-        param_learning_rate: float | Schedule = 0.5,
+        learning_rate: float | Schedule | None = None,
+        q_learning_rate: float | Schedule | None = None,
+        param_learning_rate: float | Schedule | None = None,
         gamma: float = 0.9,
         type_exploration: str = "epsilon_greedy",
         exploration_fraction: float = 0.5,
@@ -222,7 +230,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         super().__init__(
             policy,
             env,
-            learning_rate,
+            learning_rate,  # type: ignore[arg-type]  # None until the policy's default is known, below
             policy_kwargs=policy_kwargs,
             stats_window_size=stats_window_size,
             tensorboard_log=tensorboard_log,
@@ -234,8 +242,10 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
             supported_action_spaces=None,
         )
         check_policy_class(self, SarsaAACPolicy)
-        self.q_learning_rate = q_learning_rate
-        self.param_learning_rate = param_learning_rate
+        default = self.policy_class.default_learning_rate  # type: ignore[attr-defined]  # a SarsaAACPolicy, checked
+        self.learning_rate = default if learning_rate is None else learning_rate
+        self.q_learning_rate = default if q_learning_rate is None else q_learning_rate
+        self.param_learning_rate = default if param_learning_rate is None else param_learning_rate
         self.gamma = gamma
         self.type_exploration = type_exploration
         self.exploration_fraction = exploration_fraction

@@ -12,11 +12,11 @@ between any two inputs are representable without choosing them; users who know t
 Every feature has its own weight (no hashing: the table holds every tile of every grid), and an observation
 activates exactly ``C = n_groups * n_tilings`` features, so evaluation and training cost ``O(C)`` per approximator,
 whatever the table size. The forward pass is :class:`sb3_aac.runtime.forward.TileForward` (shared with the exported
-runtime); :class:`TileKernel` adds the update, the same normalised batch step as the dense banks
-(:func:`sb3_aac.sarsa_aac.approximators.step_normalisers`) computed on the sparse features: with ``w = 1 / (1 + C)``,
-sample ``i``'s weight step is scaled by ``w / c_w`` with ``c_w = max(1, max_i sum_{f active in i} n_f / C)``,
-``n_f`` the number of samples of the batch in which feature ``f`` is active, and its bias step by
-``w / max(1, n)``. For one sample, and for ``n`` identical ones, a rate of 1 lands the output on its target.
+runtime); :class:`TileKernel` adds the update, the dense banks' normalised step on the sparse features
+(:mod:`sb3_aac.sarsa_aac.lane_steps`): a sample's step is ``lr * err / (1 + C)`` on each of its ``C`` active features
+and on the bias, the lanes' samples applied one after another, each error recomputed on its predecessors' weights.
+For one sample a rate of 1 lands the output on its target; ``n`` lanes take the steps one lane would take on their
+samples.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ import torch as th
 from torch import nn
 
 from sb3_aac.sarsa_aac.approximators import NumpyBank
+from sb3_aac.sarsa_aac.lane_steps import tile_steps, traced_tile_steps
 from sb3_aac.runtime.forward import TileForward
 
 
@@ -186,36 +187,6 @@ def _outputs(active, w, b):  # type: ignore[no-untyped-def]
     return out
 
 
-@numba.njit(cache=True, nogil=True)
-def _largest_overlap(active, counts):  # type: ignore[no-untyped-def]
-    """``max_i sum_{f active in i} n_f`` (``n_f``: samples in which ``f`` is active); ``counts`` is left zero."""
-    n, c_count = active.shape
-    for i in range(n):
-        for c in range(c_count):
-            counts[active[i, c]] += 1
-    largest = 0
-    for i in range(n):
-        overlap = 0
-        for c in range(c_count):
-            overlap += counts[active[i, c]]
-        largest = max(largest, overlap)
-    for i in range(n):
-        for c in range(c_count):
-            counts[active[i, c]] = 0
-    return largest
-
-
-@numba.njit(cache=True, nogil=True)
-def _add_rows(w, active, steps):  # type: ignore[no-untyped-def]
-    """``w[active[i, c]] += steps[i]`` for every ``i``, ``c`` (repeated features add up)."""
-    n, c_count = active.shape
-    for i in range(n):
-        for c in range(c_count):
-            row = active[i, c]
-            for a in range(w.shape[1]):
-                w[row, a] += steps[i, a]
-
-
 class TileKernel(TileForward):
     """
     The tile forward pass on views of a :class:`TileBank`'s CPU parameters, with the closed-form update.
@@ -229,7 +200,6 @@ class TileKernel(TileForward):
             raise ValueError(f"The numpy kernel needs CPU tensors, the bank is on {bank.obs_mid.device}")
         super().__init__(**bank.arrays())
         self.n_features = bank.n_features
-        self._counts = np.zeros(bank.n_features, dtype=np.int64)
 
     def features(self, obs: np.ndarray) -> np.ndarray:
         obs = np.ascontiguousarray(obs, dtype=np.float64)
@@ -246,98 +216,38 @@ class TileKernel(TileForward):
 
     def update(self, cache: TileCache, err: np.ndarray, lr: np.ndarray, hidden_gain: np.ndarray | None = None) -> None:
         """
-        One batch-normalised step on ``0.5 * err**2`` (module docstring), in place. ``hidden_gain`` is accepted for
-        the dense banks' interface and unused (there is no hidden layer).
+        The normalised step on ``0.5 * err**2`` for each sample in turn (module docstring), in place. ``hidden_gain``
+        is accepted for the dense banks' interface and unused (there is no hidden layer).
         """
-        active, g, weight_scale, bias_scale = self._step_scales(cache, err, lr)
-        _add_rows(self.w, active, g * weight_scale)
-        self.b += g.sum(0) * bias_scale
-
-    def _step_scales(self, cache: TileCache, err: np.ndarray, lr: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
-        """The batch's active features, ``err * lr``, and the factors that make it the normalised step of the
-        weights and of the bias (module docstring)."""
-        n = len(err)
-        active = cache.x[:n]
-        c = active.shape[1]
-        w = 1.0 / (1.0 + c)
-        # alpha = w * c: G_w / alpha = max_i overlap_i / c; sum_j w / (1 - alpha) = n.
-        weight_batch = max(1.0, _largest_overlap(active, self._counts) / c)
-        return active, err * lr, w / weight_batch, w / max(1.0, n)
+        tile_steps(self.w, self.b, cache.x[: len(err)], np.ascontiguousarray(err, dtype=np.float64), lr)
 
     def update_traced(self, cache: TileCache, err: np.ndarray, lr: np.ndarray, hit: np.ndarray, traces: TileTraces) -> None:
         """
-        :meth:`update` with eligibility traces on ``traces.columns``: their step, the same normalised step on
-        ``err * lr``, goes to every feature (and the bias) in proportion to its trace after folding in this step's
-        features with ``hit`` ``(n, T)`` (see :class:`TileTraces`); the other columns take :meth:`update`'s step.
-        With ``decay == 0`` and replacing traces this is :meth:`update` exactly.
+        :meth:`update` with eligibility traces on ``traces.columns``: per sample in turn, their step (the same
+        normalised step, its error recomputed on the weights the earlier samples left) goes to every feature (and
+        the bias) in proportion to its trace after folding in this sample's features with ``hit`` ``(n, T)`` (see
+        :class:`TileTraces`); the other columns take :meth:`update`'s step. With ``decay == 0`` and replacing traces
+        this is :meth:`update` exactly.
         """
-        active, g, weight_scale, bias_scale = self._step_scales(cache, err, lr)
-        n = len(err)
-        columns = traces.columns
-        _trace_step(
+        trace_column = np.full(self.w.shape[1], -1, dtype=np.int64)
+        trace_column[traces.columns] = np.arange(len(traces.columns))
+        traced_tile_steps(
             self.w,
-            active,
-            g * weight_scale,
-            columns,
+            self.b,
+            cache.x[: len(err)],
+            np.ascontiguousarray(err, dtype=np.float64),
+            lr,
+            trace_column,
             hit,
             traces.decay,
             traces.replacing,
             traces.tolerance,
             traces.trace,
+            traces.bias_trace,
             traces.listed,
             traces.live,
             traces.n_live,
         )
-        bias_trace = traces.bias_trace[:n]
-        bias_trace *= traces.decay
-        if traces.replacing:
-            bias_trace[:] = hit
-        else:
-            bias_trace += hit
-        g_other = g.copy()
-        g_other[:, columns] = 0.0
-        _add_rows(self.w, active, g_other * weight_scale)
-        g_other[:, columns] = g[:, columns] * bias_trace
-        self.b += g_other.sum(0) * bias_scale
-
-
-@numba.njit(cache=True, nogil=True)
-def _trace_step(w, active, steps, columns, hit, decay, replacing, tolerance, trace, listed, live, n_live):  # type: ignore[no-untyped-def]
-    """
-    Per lane ``i``: decay its traces by ``decay`` (dropping features whose traces all fell below ``tolerance``),
-    set (``replacing``) or add ``hit[i]`` on its active features, then ``w[f, columns] += steps[i, columns] *
-    trace[i, f]`` for every feature ``f`` with a trace.
-    """
-    n, c_count = active.shape
-    t_count = len(columns)
-    for i in range(n):
-        kept = 0
-        for s in range(n_live[i]):
-            f = live[i, s]
-            alive = False
-            for j in range(t_count):
-                trace[i, f, j] *= decay
-                alive |= abs(trace[i, f, j]) >= tolerance
-            if alive:
-                live[i, kept] = f
-                kept += 1
-            else:
-                listed[i, f] = False
-                for j in range(t_count):
-                    trace[i, f, j] = 0.0
-        for c in range(c_count):
-            f = active[i, c]
-            if not listed[i, f]:
-                listed[i, f] = True
-                live[i, kept] = f
-                kept += 1
-            for j in range(t_count):
-                trace[i, f, j] = hit[i, j] if replacing else trace[i, f, j] + hit[i, j]
-        n_live[i] = kept
-        for s in range(kept):
-            f = live[i, s]
-            for j in range(t_count):
-                w[f, columns[j]] += steps[i, columns[j]] * trace[i, f, j]
 
 
 @numba.njit(cache=True, nogil=True)
