@@ -1,6 +1,7 @@
 """``sb3-aac bench``: quick speed figures of this installation, from the installed packages alone: env steps per
 second (:mod:`robocup_dribble.speed`) and microseconds per decision of an exported policy next to
-``SarsaAAC.predict``. The repository's ``benchmarks/`` scripts measure more (DQN, the growth with the number of RBFs)."""
+``SarsaAAC.predict``. The repository's ``benchmarks/speed/`` scripts measure more (DQN, the growth with the number
+of RBFs)."""
 
 from __future__ import annotations
 
