@@ -121,3 +121,34 @@ def test_sizes_beyond_the_limits_are_refused_at_construction(algo, policy, kwarg
 
     with pytest.raises(ValueError, match=message):
         getattr(sb3_aac, algo)(policy, ParameterizedTargetEnv(), **kwargs)
+
+
+@algos(ALGO_CLASSES)
+def test_an_empty_batch_is_one_clear_error_everywhere(case, tmp_path) -> None:
+    from sb3_aac import RuntimePolicy, export_policy
+
+    model = case.make(ParameterizedTargetEnv(), seed=0)
+    empty = np.zeros((0, *model.observation_space.shape), np.float32)
+    for deterministic in (True, False):
+        with pytest.raises(ValueError, match=r"empty batch of shape \(0, 2\)"):
+            model.predict(empty, deterministic=deterministic)
+    if case.exported:
+        runtime = RuntimePolicy.load(export_policy(model, tmp_path / "policy.aacp"))
+        for call in (runtime.act_batch, runtime.predict, runtime.outputs):
+            with pytest.raises(ValueError, match=r"empty batch of shape \(0, 2\)"):
+                call(empty)
+
+
+def test_one_runtime_policy_shared_by_threads_decides_as_alone(tmp_path) -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
+
+    model = SarsaAAC("RbfPolicy", ParameterizedTargetEnv(), seed=0)
+    model.learn(200)
+    runtime = RuntimePolicy.load(export_policy(model, tmp_path / "policy.aacp"))
+    obs = np.stack([model.observation_space.sample() for _ in range(3000)])
+    alone = [runtime.act(o) for o in obs]
+    with ThreadPoolExecutor(4) as pool:
+        shared = list(pool.map(runtime.act, obs))
+    assert all(a[0] == b[0] and np.array_equal(a[1], b[1]) for a, b in zip(alone, shared, strict=True))

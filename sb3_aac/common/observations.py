@@ -17,13 +17,16 @@ def observation_batch(observation: Any, observation_space: spaces.Space[Any]) ->
 
     :param observation: one observation or a batch, anything ``numpy.asarray`` takes
     :param observation_space: the ``Box`` space the observations belong to
-    :raises ValueError: for a space without a shape, a wrong observation shape, or NaN or inf values
+    :raises ValueError: for a space without a shape, a wrong observation shape, an empty batch (0 observations), or
+        NaN or inf values
     """
     obs = np.asarray(observation, dtype=np.float64)
     shape = observation_space.shape
     if shape is None:
         raise ValueError(f"The observation space {observation_space} has no shape; the policy needs a Box")
     if obs.shape == shape or obs.shape[1:] == shape:
+        if obs.size == 0 and obs.shape != shape:
+            raise ValueError(f"Got an empty batch of shape {obs.shape}: predict needs at least one observation")
         if not np.isfinite(obs).all():
             raise ValueError(f"The observation holds NaN or inf values: {observation}")
         return (obs.reshape(1, *shape), False) if obs.shape == shape else (obs, True)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 from typing import Any
 
 import numpy as np
@@ -58,6 +59,7 @@ class RuntimePolicy:
         slices = [self.type_slice(j) for j in range(k)]
         self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in slices]
         self._kernel_args: tuple[np.ndarray, ...] | None = None
+        self._lock = threading.Lock()  # act() reuses the buffers below
         if approx["head"]["type"] == "networks":
             self._init_networks(approx, arrays, backend)
             return
@@ -153,13 +155,19 @@ class RuntimePolicy:
         """
         The greedy decision for one observation.
 
-        Not thread-safe (it reuses internal buffers): give each thread its own ``RuntimePolicy``.
+        Thread-safe: the decision reuses internal buffers, so calls from several threads take turns (a lock); for
+        decisions in parallel give each thread its own ``RuntimePolicy``.
 
         :param obs: one observation, of the trained shape or flat
         :return: the action type as the env numbers it (``type_start + k``) and that type's parameters in the
             env's units, clipped to its bounds: a flat array of ``dims[k]`` values in its Box's dtype
         :raises ValueError: for a wrong observation size or non-finite values
         """
+        with self._lock:
+            return self._act(obs)
+
+    def _act(self, obs: Any) -> tuple[int, np.ndarray]:
+        """:meth:`act` without the lock."""
         if self._kernel_args is not None:
             x = np.asarray(obs, dtype=np.float64)
             if x.shape != self.obs_shape and x.shape != (self.obs_size,):
@@ -194,6 +202,8 @@ class RuntimePolicy:
                 f"Expected a batch of observations of shape (n, {', '.join(map(str, self.obs_shape))}) "
                 f"or (n, {self.obs_size}), got shape {x.shape}"
             )
+        if len(x) == 0:
+            raise ValueError(f"Got an empty batch of shape {x.shape}: a decision needs at least one observation")
         x = x.reshape(len(x), -1)
         if not np.isfinite(x).all():
             rows = np.flatnonzero(~np.isfinite(x).all(1))
