@@ -32,8 +32,12 @@ Outside the grid:
   (``python -m benchmarks.learning``);
 * :mod:`benchmarks.pdqn_dribble`: P-DQN / MP-DQN dribbling figures at env-step budgets
   (``python -m benchmarks.pdqn_dribble``);
-* :mod:`benchmarks.pdqn_platform`: P-DQN / MP-DQN greedy return on Platform-v0 against env steps
+* :mod:`benchmarks.pdqn_platform`: P-DQN / MP-DQN greedy score on Platform-v0 or Goal-v0 against env steps
   (``python -m benchmarks.pdqn_platform``);
+* :mod:`benchmarks.reference_init`: the reference MP-DQN code's initial parameter policy on Goal-v0
+  (``pdqn_platform --reference-init``);
+* :mod:`benchmarks.domain_baselines`: a random and a scripted policy's figures on every ``hybrid_domains`` env
+  (``python -m benchmarks.domain_baselines``);
 * :mod:`benchmarks.speed`: the speed scripts (``python -m benchmarks.speed.<name>``; the env's is
   :mod:`robocup_dribble.speed`).
 

@@ -8,6 +8,7 @@
   and ``DQN.predict``, and its growth with the number of RBFs;
 * :mod:`benchmarks.speed.c_runtime_speed`: nanoseconds per decision of the C runtime (timed by ``c/aacp_speed.c``)
   next to ``RuntimePolicy.act``, and how closely its decisions follow;
+* :mod:`benchmarks.speed.deep_speed`: SarsaAAC ``DeepPolicy``'s training env steps/s next to TD3;
 * :mod:`benchmarks.speed.timing`: the timing they share.
 
 The env's own speed script is :mod:`robocup_dribble.speed`; ``sb3-aac bench`` prints a quick subset.
