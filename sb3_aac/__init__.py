@@ -15,6 +15,7 @@ from sb3_aac.runtime import RuntimePolicy
 
 if TYPE_CHECKING:
     from sb3_aac.export import export_policy
+    from sb3_aac.hppo import HybridActorCriticPolicy, HybridPPO
     from sb3_aac.pdqn import MPDQN, PDQN, PDQNPolicy
     from sb3_aac.sarsa_aac import DeepPolicy, MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy, TilePolicy
     from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction, SelectObservation
@@ -25,6 +26,7 @@ with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handle
 # Public name -> the module that defines it, imported by __getattr__ when the name is first used.
 LAZY_NAMES = {
     "export_policy": "sb3_aac.export",
+    **dict.fromkeys(("HybridActorCriticPolicy", "HybridPPO"), "sb3_aac.hppo"),
     **dict.fromkeys(("MPDQN", "PDQN", "PDQNPolicy"), "sb3_aac.pdqn"),
     **dict.fromkeys(
         ("DeepPolicy", "MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "SarsaAAC", "SarsaAACPolicy", "TilePolicy"),
@@ -53,6 +55,8 @@ __all__ = [
     "DeepPolicy",
     "DiscretizeParameterizedAction",
     "FlattenParameterizedAction",
+    "HybridActorCriticPolicy",
+    "HybridPPO",
     "MlpPolicy",
     "PDQNPolicy",
     "RbfMlpPolicy",

@@ -21,6 +21,7 @@ import numpy as np
 from gymnasium import spaces
 
 from sb3_aac.common.output_files import replaced_atomically
+from sb3_aac.common.spaces import ParameterizedActionSpec
 from sb3_aac.sarsa_aac.policies import DeepPolicy, DenseBankPolicy, TilePolicy
 from sb3_aac.runtime.format import (
     ARRAY_DTYPE,
@@ -46,7 +47,7 @@ def _policy_of(model: Any) -> ExportablePolicy:
     if not isinstance(policy, (DenseBankPolicy, TilePolicy, DeepPolicy)):
         raise ValueError(
             "export_policy needs a SarsaAAC model or a SarsaAACPolicy on a numpy bank (MlpPolicy, RbfMlpPolicy, "
-            f"RbfPolicy, TilePolicy, DeepPolicy or their subclasses), got {type(model).__name__}"
+            f"RbfPolicy, TilePolicy, DeepPolicy or their subclasses), or a HybridPPO model, got {type(model).__name__}"
         )
     return policy
 
@@ -76,6 +77,20 @@ def policy_arrays(policy: ExportablePolicy) -> dict[str, np.ndarray]:
     return {name: np.ascontiguousarray(np.asarray(v).astype(ARRAY_DTYPE)) for name, v in arrays.items()}
 
 
+def action_header(spec: ParameterizedActionSpec) -> dict[str, Any]:
+    """The header's ``action`` section: the layout, the types' parameter counts, shapes, dtypes and offsets."""
+    return {
+        "layout": spec.layout,
+        "n_types": spec.n_types,
+        "type_start": spec.start,
+        "n_params": spec.n_params,
+        "types": [
+            {"dim": dim, "shape": [int(s) for s in box.shape], "dtype": str(box.dtype), "offset": spec.offsets[j]}
+            for j, (dim, box) in enumerate(zip(spec.dims, spec.boxes, strict=True))
+        ],
+    }
+
+
 def policy_header(policy: ExportablePolicy, metadata: dict[str, Any] | None = None) -> dict[str, Any]:
     """The JSON header (without the arrays table) describing a dense-bank, tile or deep policy."""
     from sb3_aac import __version__
@@ -97,16 +112,7 @@ def policy_header(policy: ExportablePolicy, metadata: dict[str, Any] | None = No
             "size": int(bank.n_inputs),
             "dtype": str(policy.observation_space.dtype),
         },
-        "action": {
-            "layout": spec.layout,
-            "n_types": k,
-            "type_start": spec.start,
-            "n_params": n_params,
-            "types": [
-                {"dim": dim, "shape": [int(s) for s in box.shape], "dtype": str(box.dtype), "offset": spec.offsets[j]}
-                for j, (dim, box) in enumerate(zip(spec.dims, spec.boxes, strict=True))
-            ],
-        },
+        "action": action_header(spec),
         "approximators": {
             "n_outputs": n_outputs,
             "outputs": outputs,
@@ -154,10 +160,12 @@ def _features_header(policy: ExportablePolicy) -> dict[str, Any]:
 
 def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, Any] | None = None) -> Path:
     """
-    Write a trained SarsaAAC policy as plain arrays and a JSON description (format ``sb3-aac-policy``: version 3 for
-    a :class:`~sb3_aac.sarsa_aac.policies.DeepPolicy`, whose ``networks`` head older readers cannot compute, else 2).
+    Write a trained SarsaAAC or HybridPPO policy as plain arrays and a JSON description (format ``sb3-aac-policy``:
+    version 3 for a ``networks`` head, a :class:`~sb3_aac.sarsa_aac.policies.DeepPolicy`'s or HybridPPO's, which older
+    readers cannot compute, else 2). HybridPPO's decisions are its ``mode()``: the most probable type and its mean
+    parameters (:mod:`sb3_aac.hppo.export`).
 
-    :param model: a :class:`sb3_aac.SarsaAAC` model, or its policy
+    :param model: a :class:`sb3_aac.SarsaAAC` or :class:`sb3_aac.HybridPPO` model, or its policy
     :param path: where to write; ``.aacp`` is appended when the name has no suffix (``RuntimePolicy.load`` accepts
         the same name)
     :param metadata: JSON-serialisable extras stored in the header (e.g. ``{"env_id": "RoboCupDribble-v0"}``)
@@ -165,14 +173,20 @@ def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, 
         :func:`sb3_aac.runtime.format.read_policy_file`, flushed to disk, then renamed into place: an interrupted export
         leaves the earlier file (or none), never a part or a stray temporary.
     """
-    policy = _policy_of(model)
+    from sb3_aac.hppo.policies import HybridActorCriticPolicy
+
     path = Path(policy_file_path(path))
     meta = dict(metadata or {})
     num_timesteps = getattr(model, "num_timesteps", None)
     if num_timesteps is not None:
         meta.setdefault("num_timesteps", int(num_timesteps))
-    header = policy_header(policy, meta)
-    arrays = policy_arrays(policy)
+    if isinstance(getattr(model, "policy", model), HybridActorCriticPolicy):
+        from sb3_aac.hppo.export import export_contents
+
+        header, arrays = export_contents(getattr(model, "policy", model), meta)
+    else:
+        policy = _policy_of(model)
+        header, arrays = policy_header(policy, meta), policy_arrays(policy)
     shapes = {name: a.shape for name, a in arrays.items()}
     assert shapes == expected_array_shapes({**header, "arrays": {}}), "writer/reader disagree"
     try:

@@ -161,7 +161,7 @@ class TestReplayBuffer:
     def test_bad_arguments(self):
         with pytest.raises(ValueError, match="cannot be combined"):
             self.buffer(optimize_memory_usage=True)
-        with pytest.raises(ValueError, match="buffer_size and n_envs must be >= 1"):
+        with pytest.raises(ValueError, match="buffer_size and n_envs must be whole numbers >= 1"):
             self.buffer(n_envs=0)
         env = ParameterizedTargetEnv()
         with pytest.raises(ValueError, match="stores Box observations"):

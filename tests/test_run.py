@@ -10,7 +10,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from tests.helpers import ALGO_CLASSES, ALGOS, LAYOUTS, OneStepEnv, algos
+from tests.helpers import ALGO_CLASSES, ALGOS, LAYOUTS, OWN_TESTS_ONLY, OneStepEnv, algos
 
 
 @algos()
@@ -104,9 +104,7 @@ def test_bad_info_keywords(case, info_keywords):
 @algos(ALGO_CLASSES)
 def test_non_finite_reward_raises(case):
     model = case.make(OneStepEnv(truncate=False, reward=np.nan), seed=0)
-    with pytest.raises(
-        FloatingPointError, match=rf"{case.algo.__name__} diverged: .* check that the env returns finite rewards"
-    ):
+    with pytest.raises(ValueError, match=r"non-finite \(NaN or inf\) rewards of lanes \[0\] at timestep 1;"):
         model.learn(300)
 
 
@@ -117,4 +115,4 @@ def test_every_algorithm_is_in_the_registry():
 
     exported = {getattr(sb3_aac, name) for name in sb3_aac.__all__}
     algorithms = {obj for obj in exported if isinstance(obj, type) and issubclass(obj, BaseAlgorithm)}
-    assert algorithms == {case.algo for case in ALGOS}
+    assert algorithms == {case.algo for case in ALGOS} | set(OWN_TESTS_ONLY)

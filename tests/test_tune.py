@@ -187,9 +187,11 @@ def test_bad_arguments_exit_2(tmp_path: Path, capsys, argv: list[str], message: 
 
 
 def test_settings_and_spaces_validate() -> None:
-    with pytest.raises(ValueError, match="tunable policies: \\['MlpPolicy', 'RbfMlpPolicy', 'RbfPolicy', 'TilePolicy'\\]"):
+    policies = "'MlpPolicy', 'RbfMlpPolicy', 'RbfPolicy', 'TilePolicy', 'DeepPolicy'"
+    with pytest.raises(ValueError, match=f"tunable policies: \\[{policies}\\]"):
         TuneSettings(env_id=TOY, policy="TabularPolicy")
-    with pytest.raises(ValueError, match="unknown algorithm 'dqn'; tunable algorithms: \\['mpdqn', 'pdqn', 'sarsa_aac'\\]"):
+    algorithms = "'hppo', 'mpdqn', 'pdqn', 'sarsa_aac'"
+    with pytest.raises(ValueError, match=f"unknown algorithm 'dqn'; tunable algorithms: \\[{algorithms}\\]"):
         search_space("dqn", "MlpPolicy")
     with pytest.raises(ValueError, match="eval_episodes must be >= 1, got 0"):
         TuneSettings(env_id=TOY, policy="RbfPolicy", eval_episodes=0)

@@ -32,8 +32,15 @@ ALGOS = {
     "sarsa_aac": Algorithm("SarsaAAC", "TilePolicy", POLICY_KEYS),  # the recommended policy (docs/sarsa_aac.md)
     "pdqn": Algorithm("PDQN", "MlpPolicy", PDQN_POLICY_KEYS),
     "mpdqn": Algorithm("MPDQN", "MlpPolicy", PDQN_POLICY_KEYS),
+    "hppo": Algorithm("HybridPPO", "MlpPolicy", ("net_arch", "ortho_init", "log_std_init")),
 }
 MODEL_SUFFIXES = (".zip", ".aacp")
+
+
+def algo_key(value: str) -> str:
+    """``--algo``'s value as a key of :data:`ALGOS`: the key itself or the class name (``HybridPPO`` -> ``hppo``)."""
+    by_class = {spec.class_name.lower(): key for key, spec in ALGOS.items()}
+    return by_class.get(value.lower(), value)
 
 
 def algorithm(algo: str) -> Any:

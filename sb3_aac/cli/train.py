@@ -1,4 +1,4 @@
-"""``sb3-aac train``: train SarsaAAC (or P-DQN / MP-DQN, ``--algo``) on a registered env, save the run (model,
+"""``sb3-aac train``: train SarsaAAC (or P-DQN / MP-DQN / HybridPPO, ``--algo``) on a registered env, save the run (model,
 exported policy, settings) as one set, and print a greedy evaluation. :func:`cmd_train` runs the steps in order; each
 step is its own function."""
 
@@ -20,7 +20,7 @@ from sb3_aac.cli.arguments import (
     step_count,
 )
 from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env, max_episode_length
-from sb3_aac.cli.models import ALGOS, POLICIES, algorithm, hyperparameters
+from sb3_aac.cli.models import ALGOS, POLICIES, algo_key, algorithm, hyperparameters
 from sb3_aac.cli.reports import print_dribble_report
 from sb3_aac.common.output_files import RunFolder
 
@@ -36,9 +36,15 @@ def add_train_command(add: Any) -> None:
         "sb3-aac train --env RoboCupDribblePaper-v0 --episodes 3000 --n-envs 16 --set n_rbf=30 --out runs/rbf",
     )
     train.add_argument("--env", default="RoboCupDribblePaper-v0", help="registered env id (default: %(default)s)")
-    train.add_argument("--algo", default="sarsa_aac", choices=list(ALGOS), help="algorithm (default: %(default)s)")
     train.add_argument(
-        "--policy", choices=POLICIES, help="function approximators (default: TilePolicy; MlpPolicy for pdqn/mpdqn)"
+        "--algo",
+        default="sarsa_aac",
+        type=algo_key,
+        choices=list(ALGOS),
+        help="algorithm, by key or class name (HybridPPO = hppo; default: %(default)s)",
+    )
+    train.add_argument(
+        "--policy", choices=POLICIES, help="function approximators (default: TilePolicy; MlpPolicy for pdqn/mpdqn/hppo)"
     )
     budget = train.add_mutually_exclusive_group()
     budget.add_argument(
@@ -68,7 +74,7 @@ def add_train_command(add: Any) -> None:
         default=[],
         help="a hyperparameter of --algo's class as a Python literal, repeatable: gamma=0.95, learning_rate=0.2, "
         "type_exploration=boltzmann; policy arguments (n_rbf, hidden_units, rbf_width; for pdqn/mpdqn net_arch, "
-        "actor_net_arch, param_bounding, initial_params) go into policy_kwargs",
+        "actor_net_arch, param_bounding, initial_params; for hppo net_arch, ortho_init, log_std_init) go into policy_kwargs",
     )
     train.add_argument(
         "--eval-episodes", type=episode_count_or_zero, default=1000, help="greedy evaluation episodes after training (0: none)"
@@ -124,8 +130,9 @@ def run_folder(args: argparse.Namespace) -> RunFolder:
 
 
 def exported(algo: str) -> bool:
-    """Whether ``train --out`` exports the policy (the .aacp format carries SarsaAAC's approximators, docs/pdqn.md)."""
-    return algo == "sarsa_aac"
+    """Whether ``train --out`` exports the policy (the .aacp format carries SarsaAAC's and HybridPPO's, not P-DQN's
+    Q network over the parameters, docs/pdqn.md)."""
+    return algo in ("sarsa_aac", "hppo")
 
 
 def training_budget(args: argparse.Namespace) -> tuple[int, str]:

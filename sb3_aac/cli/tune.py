@@ -1,4 +1,5 @@
-"""``sb3-aac tune``: search SarsaAAC's hyperparameters with Optuna (:mod:`sb3_aac.tune`) from the command line."""
+"""``sb3-aac tune``: search the hyperparameters of SarsaAAC (or HybridPPO, ``--algo hppo``) with Optuna
+(:mod:`sb3_aac.tune`) from the command line."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from sb3_aac.cli.arguments import CliError, episode_count, key_value, lane_count, positive_int, seed_int, step_count
 from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env
-from sb3_aac.cli.models import POLICIES, hyperparameters
+from sb3_aac.cli.models import ALGOS, POLICIES, algo_key, hyperparameters
 
 if TYPE_CHECKING:  # Optuna is an optional dependency: imported when the command runs
     from optuna import Study
@@ -18,6 +19,7 @@ if TYPE_CHECKING:  # Optuna is an optional dependency: imported when the command
 
 DEFAULT_STORAGE = "sqlite:///study.db"
 EVALUATIONS_PER_TRIAL = 5  # the default --eval-every is --timesteps divided by this
+TUNABLE_ALGOS = ("sarsa_aac", "hppo")  # the algorithms of sb3_aac.tune.search_spaces (not imported: it needs Optuna)
 
 
 def add_tune_command(add: Callable[..., argparse.ArgumentParser]) -> None:
@@ -29,6 +31,13 @@ def add_tune_command(add: Callable[..., argparse.ArgumentParser]) -> None:
         "sb3-aac tune --env RoboCupDribblePaper-v0 --policy RbfPolicy --trials 30 --timesteps 50000 --storage sqlite:///study.db",
     )
     tune.add_argument("--env", default="RoboCupDribblePaper-v0", help="registered env id (default: %(default)s)")
+    tune.add_argument(
+        "--algo",
+        default="sarsa_aac",
+        type=algo_key,
+        choices=TUNABLE_ALGOS,
+        help="algorithm, by key or class name (HybridPPO = hppo, with --policy MlpPolicy; default: %(default)s)",
+    )
     tune.add_argument(
         "--policy", default="RbfPolicy", choices=POLICIES, help="the policy whose space is searched (default: %(default)s)"
     )
@@ -60,7 +69,7 @@ def add_tune_command(add: Callable[..., argparse.ArgumentParser]) -> None:
         help="database URL, or a journal file (e.g. study.log) that processes on several machines can share "
         "(default: %(default)s)",
     )
-    tune.add_argument("--study-name", help="default: sarsa_aac-POLICY-ENV; the same name and storage resume a study")
+    tune.add_argument("--study-name", help="default: ALGO-POLICY-ENV; the same name and storage resume a study")
     tune.add_argument("--n-envs", type=lane_count, default=16, help="envs stepped side by side (default: %(default)s)")
     tune.add_argument(
         "--seed", type=seed_int, default=0, help="training seed of every trial; sampler seed (default: %(default)s)"
@@ -108,7 +117,8 @@ def cmd_tune(args: argparse.Namespace) -> None:
     except ValueError as error:
         raise CliError(str(error)) from None
     print(
-        f"tuning SarsaAAC {settings.policy} on {settings.env_id}: {args.trials} trials of {settings.timesteps} steps x "
+        f"tuning {ALGOS[settings.algo].class_name} {settings.policy} on {settings.env_id}: {args.trials} trials of "
+        f"{settings.timesteps} steps x "
         f"{settings.seeds_per_trial} seed(s), {settings.n_envs} env(s); objective {settings.objective!r} on "
         f"{settings.eval_episodes} greedy episodes every {settings.eval_every} steps; study {study_name!r} in {args.storage} "
         f"({finished_trials(study)} finished trials so far)",
@@ -136,6 +146,7 @@ def tune_settings(args: argparse.Namespace) -> TuneSettings:
         return TuneSettings(
             env_id=args.env,
             policy=args.policy,
+            algo=args.algo,
             timesteps=args.timesteps,
             eval_every=args.eval_every or max(1, args.timesteps // EVALUATIONS_PER_TRIAL),
             eval_episodes=args.eval_episodes,
@@ -143,7 +154,7 @@ def tune_settings(args: argparse.Namespace) -> TuneSettings:
             seed=args.seed,
             seeds_per_trial=args.seeds_per_trial,
             objective=objective,
-            fixed=hyperparameters(args.set),
+            fixed=hyperparameters(args.set, args.algo),
             startup_trials=args.startup_trials,
         )
     except ValueError as error:
@@ -184,5 +195,5 @@ def print_best(study: Study, settings: TuneSettings) -> None:
     print(f"best of {len(complete)} completed trials: trial {best.number}, {settings.objective} {best.value:.4g}")
     print("train with it:")
     print(f"  {train_command(settings, kwargs)}")
-    print("or add to hyperparams/sarsa_aac.yml:")
+    print(f"or add to hyperparams/{settings.algo}.yml:")
     print(zoo_entry(settings, kwargs))

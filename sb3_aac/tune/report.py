@@ -32,7 +32,8 @@ def flat_settings(kwargs: Mapping[str, Any]) -> dict[str, Any]:
 
 def train_command(settings: TuneSettings, kwargs: Mapping[str, Any]) -> str:
     """The ``sb3-aac train`` command that trains with ``kwargs`` on the study's env, budget and ``n_envs``."""
-    words = ["sb3-aac", "train", "--env", settings.env_id, "--policy", settings.policy, "--timesteps", str(settings.timesteps)]
+    words = ["sb3-aac", "train", "--env", settings.env_id, "--algo", settings.algo, "--policy", settings.policy]
+    words += ["--timesteps", str(settings.timesteps)]
     words += ["--n-envs", str(settings.n_envs)]
     for name, value in flat_settings(kwargs).items():
         words += ["--set", f"{name}={literal(value)}"]

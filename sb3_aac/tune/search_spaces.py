@@ -18,6 +18,7 @@ import optuna
 from optuna.distributions import BaseDistribution, CategoricalDistribution, FloatDistribution, IntDistribution
 from stable_baselines3.common.base_class import BaseAlgorithm
 
+from sb3_aac.hppo import HybridPPO
 from sb3_aac.pdqn import MPDQN, PDQN
 from sb3_aac.sarsa_aac import SarsaAAC
 
@@ -65,7 +66,7 @@ class SearchSpace:
         return kwargs
 
 
-ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"sarsa_aac": SarsaAAC, "pdqn": PDQN, "mpdqn": MPDQN}
+ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"sarsa_aac": SarsaAAC, "pdqn": PDQN, "mpdqn": MPDQN, "hppo": HybridPPO}
 
 # SarsaAAC's rates are normalised (1 moves a linear approximator onto its target), so they are searched on (0, 1].
 # A 40-trial study of RbfPolicy on RoboCupDribblePaper-v0 (50k steps, 3 seeds a trial) put its best trials at the
@@ -98,6 +99,23 @@ _PDQN = {
     "param_noise_std": FloatDistribution(1e-4, 0.5, log=True),
 }
 
+# HybridPPO: the ranges rl-zoo3 searches for PPO (its sample_ppo_params), with the parameter actor's clip range and
+# entropy coefficient beside the discrete actor's. Not yet run as a study.
+_HPPO = {
+    "learning_rate": FloatDistribution(1e-5, 3e-3, log=True),
+    "n_steps": CategoricalDistribution([64, 128, 256, 512, 1024]),
+    "batch_size": CategoricalDistribution([64, 128, 256, 512]),
+    "n_epochs": IntDistribution(3, 20),
+    "gamma": FloatDistribution(0.9, 0.9999),
+    "gae_lambda": FloatDistribution(0.8, 1.0),
+    "clip_range": FloatDistribution(0.05, 0.4),
+    "clip_range_params": FloatDistribution(0.05, 0.4),
+    "ent_coef": FloatDistribution(1e-5, 0.1, log=True),
+    "param_ent_coef": FloatDistribution(1e-6, 1e-2, log=True),
+    "vf_coef": FloatDistribution(0.2, 1.0),
+    "max_grad_norm": FloatDistribution(0.3, 5.0, log=True),
+}
+
 SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
     ("pdqn", "MlpPolicy"): SearchSpace(_PDQN),
     ("mpdqn", "MlpPolicy"): SearchSpace(_PDQN),
@@ -114,6 +132,7 @@ SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
     ("sarsa_aac", "DeepPolicy"): SearchSpace(
         {**_SARSA_AAC, "trace_lambda": FloatDistribution(0.0, 0.95)}, {"kappa": FloatDistribution(1.0, 4.0)}
     ),
+    ("hppo", "MlpPolicy"): SearchSpace(_HPPO, {"log_std_init": FloatDistribution(-2.0, 0.5)}),
 }
 
 

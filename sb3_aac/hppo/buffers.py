@@ -1,0 +1,90 @@
+"""The rollout buffer of HybridPPO: SB3's ``RolloutBuffer`` (GAE, minibatches) over packed actions, with the
+parameter log-probabilities stored beside the type log-probabilities, so each part gets its own PPO ratio."""
+
+from __future__ import annotations
+
+from collections.abc import Generator
+from typing import Any, NamedTuple
+
+import numpy as np
+import torch as th
+from gymnasium import spaces
+from stable_baselines3.common.buffers import RolloutBuffer
+from stable_baselines3.common.vec_env import VecNormalize
+
+
+class HybridRolloutBufferSamples(NamedTuple):
+    """A minibatch (``B`` rows) as tensors; actions are packed ``[k, x]`` rows (see :mod:`sb3_aac.hppo.distributions`)."""
+
+    observations: th.Tensor
+    actions: th.Tensor
+    old_values: th.Tensor
+    old_type_log_prob: th.Tensor
+    """``(B,)``: ``log p(k|s)`` under the policy that collected the rollout."""
+    advantages: th.Tensor
+    returns: th.Tensor
+    old_param_log_prob: th.Tensor
+    """``(B,)``: ``log N(x_k; mu_k, sigma_k)`` under the policy that collected the rollout."""
+
+
+def packed_action_space(n_params: int) -> spaces.Box:
+    """The Box SB3's buffer sizes its action rows by: ``1 + n_params`` float32 columns, the type then the parameters."""
+    return spaces.Box(-np.inf, np.inf, (1 + n_params,), np.float32)
+
+
+class HybridRolloutBuffer(RolloutBuffer):
+    """
+    SB3's ``RolloutBuffer`` whose ``log_probs`` hold the type log-probabilities and ``param_log_probs`` the parameter
+    log-probabilities of the same actions.
+
+    :param buffer_size: Steps per env of a rollout
+    :param observation_space: The observation space
+    :param n_params: Scalar parameters over all types (actions are stored packed, ``1 + n_params`` columns)
+    :param device: Device of the sampled tensors
+    :param gae_lambda: GAE's lambda
+    :param gamma: The discount factor
+    :param n_envs: Number of parallel environments
+    """
+
+    param_log_probs: np.ndarray
+
+    def __init__(
+        self,
+        buffer_size: int,
+        observation_space: spaces.Space[Any],
+        n_params: int,
+        device: th.device | str = "auto",
+        gae_lambda: float = 1,
+        gamma: float = 0.99,
+        n_envs: int = 1,
+    ):
+        super().__init__(buffer_size, observation_space, packed_action_space(n_params), device, gae_lambda, gamma, n_envs)
+
+    def reset(self) -> None:
+        self.param_log_probs = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
+        super().reset()
+
+    def add(  # type: ignore[override]
+        self,
+        obs: np.ndarray,
+        action: np.ndarray,
+        reward: np.ndarray,
+        episode_start: np.ndarray,
+        value: th.Tensor,
+        type_log_prob: th.Tensor,
+        param_log_prob: th.Tensor,
+    ) -> None:
+        """One step of every env: SB3's ``add`` with the log-probability split into its two parts."""
+        self.param_log_probs[self.pos] = param_log_prob.cpu().numpy()
+        super().add(obs, action, reward, episode_start, value, type_log_prob)
+
+    def get(self, batch_size: int | None = None) -> Generator[HybridRolloutBufferSamples, None, None]:  # type: ignore[override]
+        if not self.generator_ready:
+            self.param_log_probs = self.swap_and_flatten(self.param_log_probs)
+        yield from super().get(batch_size)  # type: ignore[misc]
+
+    def _get_samples(  # type: ignore[override]
+        self, batch_inds: np.ndarray, env: VecNormalize | None = None
+    ) -> HybridRolloutBufferSamples:
+        base = super()._get_samples(batch_inds, env)
+        return HybridRolloutBufferSamples(*base, old_param_log_prob=self.to_torch(self.param_log_probs[batch_inds].flatten()))
