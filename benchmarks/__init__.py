@@ -38,6 +38,8 @@ Outside the grid:
   (``pdqn_platform --reference-init``);
 * :mod:`benchmarks.domain_baselines`: a random and a scripted policy's figures on every ``hybrid_domains`` env
   (``python -m benchmarks.domain_baselines``);
+* :mod:`benchmarks.hppo`: HybridPPO against PPO through the flatten wrapper, per domain over seeds
+  (``python -m benchmarks.hppo``);
 * :mod:`benchmarks.speed`: the speed scripts (``python -m benchmarks.speed.<name>``; the env's is
   :mod:`robocup_dribble.speed`).
 

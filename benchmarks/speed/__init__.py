@@ -9,6 +9,7 @@
 * :mod:`benchmarks.speed.c_runtime_speed`: nanoseconds per decision of the C runtime (timed by ``c/aacp_speed.c``)
   next to ``RuntimePolicy.act``, and how closely its decisions follow;
 * :mod:`benchmarks.speed.deep_speed`: SarsaAAC ``DeepPolicy``'s training env steps/s next to TD3;
+* :mod:`benchmarks.speed.hppo_speed`: HybridPPO's training env steps/s next to PPO;
 * :mod:`benchmarks.speed.timing`: the timing they share.
 
 The env's own speed script is :mod:`robocup_dribble.speed`; ``sb3-aac bench`` prints a quick subset.
