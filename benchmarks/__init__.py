@@ -1,11 +1,12 @@
-"""Benchmarks of sb3-aac: speed scripts (``algo_speed.py``, ``runtime_speed.py``; the env's is
-:mod:`robocup_dribble.speed`) and the learning benchmark.
+"""Benchmarks of sb3-aac: the learning benchmark's grid, the per-task learning targets and the speed scripts.
 
-The learning benchmark runs a grid of training runs (``python -m benchmarks.run --preset quick|full``), one JSON file
-per finished run, and turns those files into a report with figures (``python -m benchmarks.report DIR``):
+The grid runs training runs (``python -m benchmarks.run --preset quick|full``), one JSON file per finished run, and
+turns those files into a report with figures (``python -m benchmarks.report DIR``):
 
 * :mod:`benchmarks.presets`: the grid (envs, algorithms, approximator configs, seeds, budgets, hyperparameters);
+* :mod:`benchmarks.domains`: the grid's envs beyond dribbling and how each one is scored;
 * :mod:`benchmarks.adapters`: baseline envs and adapters that let a Box/Discrete SB3 model act in the Tuple env;
+* :mod:`benchmarks.zoo_hyperparams`: the P-DQN / MP-DQN settings from ``hyperparams/*.yml``;
 * :mod:`benchmarks.cells`: the result files: where they live, atomic writing, the per-cell lock, the one loader;
 * :mod:`benchmarks.evaluation`: the evaluation summary, the decision cost and the learning-curve callback;
 * :mod:`benchmarks.platform_info`: versions, machine and load recorded in every cell;
@@ -24,4 +25,23 @@ per finished run, and turns those files into a report with figures (``python -m 
 * :mod:`benchmarks.report_budgets`: the report's tuned-against-default, per-budget and wall-clock sections;
 * :mod:`benchmarks.report`: ``report.md`` and its figures from a results directory (its command line);
 * :mod:`benchmarks.provenance`: the clean-tree check, each cell's provenance, and the invocation log.
+
+Outside the grid:
+
+* :mod:`benchmarks.learning`: SarsaAAC's learning targets per (task, policy) over seeds
+  (``python -m benchmarks.learning``);
+* :mod:`benchmarks.pdqn_dribble`: P-DQN / MP-DQN dribbling figures at env-step budgets
+  (``python -m benchmarks.pdqn_dribble``);
+* :mod:`benchmarks.pdqn_platform`: P-DQN / MP-DQN greedy score on Platform-v0 or Goal-v0 against env steps
+  (``python -m benchmarks.pdqn_platform``);
+* :mod:`benchmarks.reference_init`: the reference MP-DQN code's initial parameter policy on Goal-v0
+  (``pdqn_platform --reference-init``);
+* :mod:`benchmarks.domain_baselines`: a random and a scripted policy's figures on every ``hybrid_domains`` env
+  (``python -m benchmarks.domain_baselines``);
+* :mod:`benchmarks.hppo`: HybridPPO against PPO through the flatten wrapper, per domain over seeds
+  (``python -m benchmarks.hppo``);
+* :mod:`benchmarks.speed`: the speed scripts (``python -m benchmarks.speed.<name>``; the env's is
+  :mod:`robocup_dribble.speed`).
+
+The soak test is a script beside the test suite (``python tests/soak.py``).
 """

@@ -1,6 +1,7 @@
 """Engines that run a grid's cells somewhere else than the driver's own process pool: Ray.
 
-:func:`benchmarks.execution.run_grid` hands the cells still to run to an engine (``engine.run(cells, out, record)``);
+:func:`benchmarks.execution.run_grid` hands the cells still to run to an engine (a
+:class:`benchmarks.execution.CellEngine`: ``engine.run(cells, out, record)``);
 without one it uses its local process pool (the default for one machine). An engine calls ``record(cell_id,
 state, payload)`` once per cell, as the local pool does: ``state`` is ``"done"`` (``payload`` the cell's result
 dict) or ``"failed"`` (``payload`` the error text).
@@ -25,13 +26,14 @@ import re
 import shutil
 import socket
 import tempfile
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 from benchmarks.presets import Cell
 
-Record = Callable[[str, str, Any], None]
+if TYPE_CHECKING:
+    from benchmarks.execution import Record
 
 # Set in every Ray worker process before it starts (numpy and torch read them at import): one BLAS/OpenMP thread
 # per cell, as the local pool does (benchmarks/execution.py explains why).
@@ -42,14 +44,6 @@ CONNECT_TIMEOUT_S = 10.0
 _ADDRESS = re.compile(r"^(?:ray://)?(?P<host>\[[^\]]+\]|[^:/\[\]]+):(?P<port>\d{1,5})$")
 # Variables of the driver a cell records (the command line, the invocation's provenance), passed to every task.
 FORWARDED_ENV_PREFIX = "SB3_AAC_BENCH_"
-
-
-class CellEngine(Protocol):
-    """Runs cells and reports each one through ``record`` (see the module docstring)."""
-
-    name: str
-
-    def run(self, cells: Sequence[Cell], out: Path, record: Record) -> None: ...
 
 
 def run_cell_in_scratch(cell_data: dict[str, Any], environ: dict[str, str], scratch_root: str | None = None) -> dict[str, Any]:

@@ -10,9 +10,10 @@ import shutil
 import threading
 import time
 import traceback
+from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 # One BLAS thread per process: with two workers on two cores, OpenBLAS's own threads make some SarsaAAC configs
 # (RbfMlpPolicy with 20 hidden units) up to 7x slower. Set before numpy is imported here; spawned workers inherit it.
@@ -27,7 +28,6 @@ from stable_baselines3.common.logger import configure  # noqa: E402
 import robocup_dribble  # noqa: E402, F401  (registers the env ids)
 from benchmarks import cells  # noqa: E402
 from benchmarks.cells import atomic_write_json, atomic_write_text, cell_lock, remove_stale_temporaries, save_model_atomic  # noqa: E402
-from benchmarks.engines import CellEngine  # noqa: E402
 from benchmarks import domains  # noqa: E402
 from benchmarks.evaluation import EvalCallback, predict_microseconds  # noqa: E402
 from benchmarks.platform_info import loadavg, machine, versions  # noqa: E402
@@ -50,6 +50,19 @@ from benchmarks.zoo_hyperparams import settings  # noqa: E402
 from robocup_dribble.evaluation import evaluate_dribbling  # noqa: E402
 
 PARENT_POLL_SECONDS = 0.2  # how often a worker checks that the driver still lives
+
+# How an engine reports a cell to :func:`run_grid`: ``record(cell_id, state, payload)``, ``state`` "done" (payload the
+# cell's result dict) or "failed" (payload the error text).
+Record = Callable[[str, str, Any], None]
+
+
+class CellEngine(Protocol):
+    """Runs cells somewhere else than :func:`run_grid`'s local pool (:class:`benchmarks.engines.RayEngine`) and reports
+    each one through ``record``."""
+
+    name: str
+
+    def run(self, cells: Sequence[Cell], out: Path, record: Record) -> None: ...
 
 
 def peer_settings(cell: Cell) -> dict[str, Any]:

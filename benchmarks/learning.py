@@ -58,13 +58,13 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 import torch as th  # noqa: E402
 from scipy import stats  # noqa: E402
-from stable_baselines3.common.callbacks import BaseCallback  # noqa: E402
 from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
 from stable_baselines3.common.evaluation import evaluate_policy  # noqa: E402
 from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
 
 from sb3_aac import SarsaAAC, SelectObservation  # noqa: E402
 from benchmarks.presets import EVAL_SEED, FINAL_SEED  # noqa: E402
+from sb3_aac.common.checkpoints import GreedyCheckpoints  # noqa: E402
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv  # noqa: E402
 
 # name: (policy, policy_kwargs)
@@ -177,22 +177,17 @@ def iqm_ci(values: list[float], resamples: int = 10_000) -> tuple[float, float]:
     return float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))
 
 
-class TargetWatch(BaseCallback):
+class TargetWatch(GreedyCheckpoints):
     """Greedy score every ``every`` env steps; remembers the training episodes when it first reached ``target``."""
 
     def __init__(self, score: Score, every: int, target: float):
-        super().__init__()
-        self.score, self.every, self.target = score, every, target
-        self.next_check, self.reached_at, self.curve = every, None, []
+        super().__init__(every, lambda model: score(model, True))
+        self.target = target
+        self.reached_at: int | None = None
 
-    def _on_step(self) -> bool:
-        if self.num_timesteps >= self.next_check:
-            self.next_check += self.every
-            value = self.score(self.model, True)  # type: ignore[arg-type]
-            episodes = self.model.episode_num  # type: ignore[attr-defined]
-            self.curve.append((episodes, value))
-            if self.reached_at is None and value >= self.target:
-                self.reached_at = episodes
+    def on_checkpoint(self, score: float) -> bool:
+        if self.reached_at is None and score >= self.target:
+            self.reached_at = self.model.episode_num  # type: ignore[attr-defined]
         return True
 
 

@@ -24,12 +24,12 @@ from typing import Any
 
 import gymnasium as gym
 import torch as th
-from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 
 from benchmarks import domains
 from benchmarks.zoo_hyperparams import env_wrapper, settings
 from sb3_aac import MPDQN, PDQN
+from sb3_aac.common.checkpoints import GreedyCheckpoints
 
 ENVS = ("Platform-v0", "Goal-v0")
 
@@ -43,24 +43,19 @@ def make_env(algo: str, env_id: str, seed: int, n_envs: int = 1):
     return make_vec_env(lambda: wrap(gym.make(env_id)), n_envs=n_envs, seed=seed)
 
 
-class GreedyEvaluation(BaseCallback):
+class GreedyEvaluation(GreedyCheckpoints):
     """Scores the greedy policy (:func:`benchmarks.domains.evaluate`) every ``every`` env steps and records (steps,
     episodes, the domain's metric)."""
 
     def __init__(self, env_id: str, every: int, episodes: int, seed: int):
-        super().__init__()
-        self.env_id, self.every, self.episodes, self.seed = env_id, every, episodes, seed
+        self.key = domains.metric(env_id)
+        super().__init__(every, lambda model: domains.evaluate(env_id, model, episodes, seed)[self.key])
         self.history: list[dict] = []
-        self.next_eval = every
 
-    def _on_step(self) -> bool:
-        if self.num_timesteps >= self.next_eval:
-            self.next_eval += self.every
-            summary = domains.evaluate(self.env_id, self.model, self.episodes, self.seed)
-            key = domains.metric(self.env_id)
-            row = dict(steps=self.num_timesteps, episodes=self.model.episode_num, **{key: round(summary[key], 4)})
-            self.history.append(row)
-            print(json.dumps(row), flush=True)
+    def on_checkpoint(self, score: float) -> bool:
+        row = dict(steps=self.num_timesteps, episodes=self.model.episode_num, **{self.key: round(score, 4)})
+        self.history.append(row)
+        print(json.dumps(row), flush=True)
         return True
 
 

@@ -1,6 +1,7 @@
 """``sb3-aac bench``: quick speed figures of this installation, from the installed packages alone: env steps per
 second (:mod:`robocup_dribble.speed`) and microseconds per decision of an exported policy next to
-``SarsaAAC.predict``. The repository's ``benchmarks/`` scripts measure more (DQN, the growth with the number of RBFs)."""
+``SarsaAAC.predict``. The repository's ``benchmarks/speed/`` scripts measure more (DQN, the growth with the number
+of RBFs)."""
 
 from __future__ import annotations
 
@@ -49,6 +50,11 @@ def cmd_bench(args: argparse.Namespace) -> None:
         )
 
 
+def load_average() -> float:
+    """The one-minute load average (NaN where the platform has none)."""
+    return os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+
+
 def microseconds(fn: Callable[[], Any], calls: int, repeats: int) -> float:
     """Best of ``repeats`` runs of ``calls`` calls, per call, after one warm-up call (numba compiles there)."""
     fn()
@@ -67,8 +73,7 @@ def decision_costs(configs: tuple[tuple[str, dict[str, Any]], ...], calls: int, 
     env = DribbleVecEnv(8, profile=DECISION_PROFILE)
     env.observation_space.seed(0)
     obs = env.observation_space.sample()  # uniform inside the bounds
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"\nus per decision, one observation (best of {repeats} x {calls} calls; load average {load:.2f})")
+    print(f"\nus per decision, one observation (best of {repeats} x {calls} calls; load average {load_average():.2f})")
     print(f"{'policy':32s} {'RuntimePolicy.act':>18s} {'act (numpy only)':>17s} {'SarsaAAC.predict':>17s}")
     with tempfile.TemporaryDirectory() as tmp:
         for policy, kwargs in configs:

@@ -8,9 +8,10 @@ from typing import Any
 import numpy as np
 import optuna
 from stable_baselines3.common.base_class import BaseAlgorithm
-from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import VecEnv
+
+from sb3_aac.common.checkpoints import GreedyCheckpoints
 
 RETURN = "return"  # the objective name meaning the episode return rather than an info key
 
@@ -38,10 +39,11 @@ def greedy_score(model: BaseAlgorithm, env: VecEnv, n_episodes: int, seed: int, 
     return float(np.mean(returns if objective == RETURN else values))
 
 
-class TrialEvaluation(BaseCallback):
+class TrialEvaluation(GreedyCheckpoints):
     """
-    Every ``eval_every`` environment steps: the greedy score on the fixed evaluation episodes, reported to ``trial``
-    as intermediate value number ``first_report``, ``first_report + 1``, ... Training stops (``learn`` returns) when
+    Every ``eval_every`` environment steps (:class:`~sb3_aac.common.checkpoints.GreedyCheckpoints`): the greedy score
+    on the fixed evaluation episodes, reported to ``trial`` as intermediate value number ``first_report``,
+    ``first_report + 1``, ... Training stops (``learn`` returns) when
     the trial's pruner says so (then :attr:`pruned` is True) or when ``stop`` is set (Ctrl-C).
 
     :param trial: the Optuna trial reported to
@@ -65,20 +67,18 @@ class TrialEvaluation(BaseCallback):
         stop: threading.Event,
         first_report: int = 0,
     ):
-        super().__init__()
+        super().__init__(eval_every, lambda model: greedy_score(model, eval_env, n_episodes, seed, objective))
         self.trial, self.eval_env, self.eval_every = trial, eval_env, eval_every
         self.n_episodes, self.seed, self.objective, self.stop = n_episodes, seed, objective, stop
         self.reports = first_report
         self.pruned = False
-        self._next_evaluation = eval_every
 
     def _on_step(self) -> bool:
         if self.stop.is_set():
             return False
-        if self.num_timesteps < self._next_evaluation:
-            return True
-        self._next_evaluation += self.eval_every
-        score = greedy_score(self.model, self.eval_env, self.n_episodes, self.seed, self.objective)
+        return super()._on_step()
+
+    def on_checkpoint(self, score: float) -> bool:
         self.trial.report(score, self.reports)
         self.reports += 1
         self.pruned = self.trial.should_prune()

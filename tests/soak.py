@@ -1,9 +1,12 @@
 """Soak test, to rerun before a release (not in CI): long runs that look for slow faults no unit test sees.
 
+A script next to the test suite, not a collected test: it takes half an hour, past what CI runs (the suite's slow
+tests still run in CI), and it is no part of the benchmark grid.
+
 Usage::
 
-    python benchmarks/soak.py                                      # 10M lane-steps, 1M training steps (~30+ min)
-    python benchmarks/soak.py --lane-steps 2000000 --train-steps 100000   # scaled down
+    python tests/soak.py                                      # 10M lane-steps, 1M training steps (~30+ min)
+    python tests/soak.py --lane-steps 2000000 --train-steps 100000   # scaled down
 
 Two phases, each reporting the non-finite values it met, the growth of the resident memory (RSS) from the end of a
 warm-up to the end, and the files left behind:
@@ -147,7 +150,7 @@ def soak_stepping(lane_steps: int, lanes: int, policy: RuntimePolicy, profile: s
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python benchmarks/soak.py", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="python tests/soak.py", description=__doc__.split("\n\n")[0])
     parser.add_argument("--lane-steps", type=int, default=10_000_000, help="env lane-steps of the step phase")
     parser.add_argument("--lanes", type=int, default=1024, help="lanes of the stepped DribbleVecEnv")
     parser.add_argument("--train-steps", type=int, default=1_000_000, help="SarsaAAC training steps")
@@ -156,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
     th.set_num_threads(1)
-    print(f"$ python benchmarks/soak.py {' '.join(sys.argv[1:] if argv is None else argv)}")
+    print(f"$ python tests/soak.py {' '.join(sys.argv[1:] if argv is None else argv)}")
     rss_begin = rss_mb()
     with tempfile.TemporaryDirectory(prefix="sb3-aac-soak-") as scratch:
         folder = Path(scratch)

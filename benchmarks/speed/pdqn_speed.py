@@ -8,7 +8,7 @@ in the benchmark's baselines. All four take one gradient step per step of the ve
 ``gradient_steps=1``: one per ``n_envs`` transitions) on minibatches of 128 with two hidden layers of 64 units, so the
 figures compare the cost of the algorithms, not of their default settings.
 
-Usage: ``python benchmarks/pdqn_speed.py [--env RoboCupDribblePaper-v0] [--steps 5000] [--n-envs 1 16]``
+Usage: ``python -m benchmarks.speed.pdqn_speed [--env RoboCupDribblePaper-v0] [--steps 5000] [--n-envs 1 16]``
 
 Single runs on a shared machine: repeat them, and report the load average next to the numbers.
 """
@@ -16,8 +16,6 @@ Single runs on a shared machine: repeat them, and report the load average next t
 from __future__ import annotations
 
 import argparse
-import os
-import time
 
 import gymnasium as gym
 import torch as th
@@ -25,7 +23,8 @@ from stable_baselines3 import DQN, TD3
 from stable_baselines3.common.env_util import make_vec_env
 
 import robocup_dribble  # noqa: F401  (registers the env ids)
-from benchmarks.algo_speed import predict_microseconds
+from benchmarks.speed.algo_speed import predict_microseconds
+from benchmarks.speed.timing import load_average, steps_per_second
 from sb3_aac import MPDQN, PDQN, DiscretizeParameterizedAction, FlattenParameterizedAction
 
 ALGOS = ("PDQN", "MPDQN", "TD3", "DQN")
@@ -43,13 +42,6 @@ def build(algo: str, env_id: str, n_envs: int):
     return DQN("MlpPolicy", env, policy_kwargs=dict(net_arch=[64, 64]), **COMMON)
 
 
-def steps_per_second(model, steps: int) -> float:
-    model.learn(500)  # warm-up: past learning_starts, first allocations
-    start = time.perf_counter()
-    model.learn(steps, reset_num_timesteps=False)
-    return steps / (time.perf_counter() - start)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[1])
     parser.add_argument("--env", default="RoboCupDribblePaper-v0", help="a registered parameterized-action env id")
@@ -57,14 +49,14 @@ def main() -> None:
     parser.add_argument("--n-envs", type=int, nargs="+", default=[1, 16])
     args = parser.parse_args()
     th.set_num_threads(1)
-    print(f"{args.env}; torch threads 1; {args.steps} steps per measurement; load average {os.getloadavg()[0]:.1f}")
+    print(f"{args.env}; torch threads 1; {args.steps} steps per measurement; load average {load_average():.1f}")
     print(
         f"{'n_envs':>6} "
         + " ".join(f"{algo:>8}" for algo in ALGOS)
         + "   (env steps/s; one gradient step per n_envs env steps)"
     )
     for n_envs in args.n_envs:
-        rates = [steps_per_second(build(algo, args.env, n_envs), args.steps) for algo in ALGOS]
+        rates = [steps_per_second(build(algo, args.env, n_envs), args.steps, warmup=500) for algo in ALGOS]
         print(f"{n_envs:>6} " + " ".join(f"{rate:>8.0f}" for rate in rates), flush=True)
     obs = gym.make(args.env).reset(seed=0)[0]
     latencies = {algo: predict_microseconds(build(algo, args.env, 1), obs) for algo in ALGOS}

@@ -11,7 +11,7 @@ column gives HybridPPO on the batched :class:`robocup_dribble.DribbleVecEnv` (th
 The measurements are interleaved and repeated (``--repeats``); the medians are printed, so that a load change on a
 shared machine hits both sides alike.
 
-Usage: ``python -m benchmarks.hppo_speed [--env RoboCupDribblePaper-v0] [--steps 8192] [--repeats 3]``
+Usage: ``python -m benchmarks.speed.hppo_speed [--env RoboCupDribblePaper-v0] [--steps 8192] [--repeats 3]``
 """
 
 from __future__ import annotations
@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
-import time
 from typing import Any
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -31,6 +30,7 @@ from stable_baselines3 import PPO  # noqa: E402
 from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
 
 import robocup_dribble  # noqa: E402
+from benchmarks.speed.timing import load_average, steps_per_second  # noqa: E402
 from sb3_aac import FlattenParameterizedAction, HybridPPO  # noqa: E402
 from sb3_aac.cli import register_toy_env  # noqa: E402
 
@@ -50,12 +50,9 @@ def build(column: str, env_id: str, n_envs: int) -> Any:
     return HybridPPO("MlpPolicy", env, seed=0, device="cpu", policy_kwargs=policy_kwargs, **ROLLOUT)
 
 
-def steps_per_second(column: str, env_id: str, n_envs: int, steps: int) -> float:
-    model = build(column, env_id, n_envs)
-    model.learn(n_envs * ROLLOUT["n_steps"])  # warm-up: compiled kernels, first allocations
-    start = time.perf_counter()
-    model.learn(steps, reset_num_timesteps=False)
-    return steps / (time.perf_counter() - start)
+def training_rate(column: str, env_id: str, n_envs: int, steps: int) -> float:
+    # warm-up: one rollout per env (compiled kernels, first allocations)
+    return steps_per_second(build(column, env_id, n_envs), steps, warmup=n_envs * ROLLOUT["n_steps"])
 
 
 def main() -> None:
@@ -73,9 +70,9 @@ def main() -> None:
     rates: dict[str, list[float]] = {column: [] for column in columns}
     for _ in range(args.repeats):
         for column in columns:
-            rates[column].append(steps_per_second(column, args.env, args.n_envs, args.steps))
+            rates[column].append(training_rate(column, args.env, args.n_envs, args.steps))
     medians = {column: statistics.median(values) for column, values in rates.items()}
-    print(f"{args.env}, {args.n_envs} envs, {args.steps} steps x {args.repeats} (medians; load {os.getloadavg()[0]:.1f})")
+    print(f"{args.env}, {args.n_envs} envs, {args.steps} steps x {args.repeats} (medians; load {load_average():.1f})")
     for column in columns:
         ratio = medians[column] / medians["PPO"]
         runs = ", ".join(f"{value:.0f}" for value in rates[column])

@@ -8,7 +8,7 @@ layers of 64) on the env's own actions, on one lane and on ``--lanes`` lanes. Ea
 steps (TD3's replay buffer fills past ``learning_starts``, numba and numpy warm up), then ``--steps`` steps are
 timed; the figure is the best of ``--repeats`` timings. One torch and one BLAS thread.
 
-Usage: ``python benchmarks/deep_speed.py [--env navigation|RoboCupDribblePaper-v0] [--steps 3000] [--lanes 16]``
+Usage: ``python -m benchmarks.speed.deep_speed [--env navigation|RoboCupDribblePaper-v0] [--steps 3000] [--lanes 16]``
 
 Target: ``DeepPolicy`` >= 5x TD3's env steps per second on the same env. Single runs on a shared machine:
 report the load average (printed) with the numbers.
@@ -18,31 +18,19 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
 
-# One BLAS thread (see benchmarks/algo_speed.py). Set before numpy is imported.
+# One BLAS thread (see benchmarks/speed/algo_speed.py). Set before numpy is imported.
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import torch as th  # noqa: E402
 from stable_baselines3 import TD3  # noqa: E402
-from stable_baselines3.common.base_class import BaseAlgorithm  # noqa: E402
 from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
 
 import robocup_dribble  # noqa: E402, F401  (registers the dribbling env ids)
+from benchmarks.speed.timing import load_average, steps_per_second  # noqa: E402
 from sb3_aac import FlattenParameterizedAction, SarsaAAC  # noqa: E402
 from sb3_aac.common.envs import NavigationEnv  # noqa: E402
-
-
-def steps_per_second(model: BaseAlgorithm, warmup: int, steps: int, repeats: int) -> float:
-    """Env steps per second of ``model.learn`` after ``warmup`` steps (best of ``repeats`` timings)."""
-    model.learn(warmup)
-    best = 0.0
-    for _ in range(repeats):
-        start = time.perf_counter()
-        model.learn(steps, reset_num_timesteps=False)
-        best = max(best, steps / (time.perf_counter() - start))
-    return best
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -55,15 +43,14 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     th.set_num_threads(1)
     env_id = NavigationEnv if args.env == "navigation" else args.env
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"env steps/s on {args.env} (best of {args.repeats} x {args.steps} steps; load average {load:.2f})")
+    print(f"env steps/s on {args.env} (best of {args.repeats} x {args.steps} steps; load average {load_average():.2f})")
 
     td3_env = make_vec_env(env_id, n_envs=1, seed=0, wrapper_class=FlattenParameterizedAction)
-    td3 = steps_per_second(TD3("MlpPolicy", td3_env, seed=0, device="cpu"), args.warmup, args.steps, args.repeats)
+    td3 = steps_per_second(TD3("MlpPolicy", td3_env, seed=0, device="cpu"), args.steps, args.warmup, args.repeats)
     print(f"{'TD3 (1 lane, 1 gradient step per transition)':48s} {td3:10.0f}")
     for lanes in (1, args.lanes):
         model = SarsaAAC("DeepPolicy", make_vec_env(env_id, n_envs=lanes, seed=0), seed=0, trace_lambda=0.8)
-        deep = steps_per_second(model, args.warmup, args.steps, args.repeats)
+        deep = steps_per_second(model, args.steps, args.warmup, args.repeats)
         print(f"{f'SarsaAAC DeepPolicy ({lanes} lanes, trace_lambda=0.8)':48s} {deep:10.0f}   {deep / td3:6.1f}x TD3")
 
 

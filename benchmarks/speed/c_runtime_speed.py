@@ -1,5 +1,5 @@
 """
-Nanoseconds per greedy decision in C (``sb3_aac/runtime/c/aacp.h``, timed by ``benchmarks/c/aacp_speed.c``) next to
+Nanoseconds per greedy decision in C (``sb3_aac/runtime/c/aacp.h``, timed by ``benchmarks/speed/c/aacp_speed.c``) next to
 :meth:`sb3_aac.RuntimePolicy.act` (numba and numpy-only) in the same run, for each policy kind; and how closely the C
 decisions follow ``RuntimePolicy.act`` (type mismatches, largest parameter difference).
 
@@ -9,7 +9,7 @@ tests/test_c_runtime.py draws them). The C timer is compiled here with the machi
 ``-O2``); each C figure is the best of ``--repeats`` runs of ``--calls`` decisions cycling through the observations
 (CPU time), each Python figure the best of ``--repeats`` timeit runs; report the load average with the numbers.
 
-Usage: ``python benchmarks/c_runtime_speed.py [--quick] [--calls 200000] [--repeats 5] [--cflags "-O2"]``
+Usage: ``python -m benchmarks.speed.c_runtime_speed [--quick] [--calls 200000] [--repeats 5] [--cflags "-O2"]``
 
 Target (issue 20): <= 1 us per decision in C for RbfPolicy with 10 RBFs per input, decisions identical to
 ``RuntimePolicy.act`` (types identical, parameters within 1e-5: also tested in ``tests/test_c_runtime.py``).
@@ -18,18 +18,17 @@ Target (issue 20): <= 1 us per decision in C for RbfPolicy with 10 RBFs per inpu
 from __future__ import annotations
 
 import argparse
-import os
 import shlex
 import shutil
 import subprocess
 import tempfile
-import timeit
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import robocup_dribble
+from benchmarks.speed.timing import load_average, microseconds
 from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
 from sb3_aac.runtime.c import header_path
 from sb3_aac.runtime.format import SUPPORTED_VERSIONS
@@ -70,7 +69,7 @@ def observations(n: int, seed: int = 1) -> np.ndarray:
 
 def c_decisions(path: Path, obs: np.ndarray, folder: Path) -> tuple[np.ndarray, list[np.ndarray]]:
     """The C runtime's types and parameters for ``obs``, through the test driver's ``act`` mode."""
-    driver = Path(__file__).resolve().parents[1] / "tests" / "c_runtime" / "aacp_check.c"
+    driver = Path(__file__).resolve().parents[2] / "tests" / "c_runtime" / "aacp_check.c"
     binary = folder / "aacp_check"
     if not binary.exists():
         command = ["cc", "-std=c99", "-O2", "-I", str(header_path().parent), str(driver), "-o", str(binary), "-lm"]
@@ -91,8 +90,7 @@ def python_us(policy: RuntimePolicy, obs: np.ndarray, calls: int, repeats: int) 
     def one() -> Any:
         return policy.act(obs[next(rows) % len(obs)])
 
-    one()  # warm-up (and numba compilation)
-    return min(timeit.repeat(one, number=calls, repeat=repeats)) / calls * 1e6
+    return microseconds(one, calls, repeats)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -107,7 +105,7 @@ def main(argv: list[str] | None = None) -> None:
         args.calls, args.repeats, args.train_steps = min(args.calls, 20_000), min(args.repeats, 3), min(args.train_steps, 200)
     python_calls = max(args.calls // 40, 200)
     obs = observations(N_OBS)
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    load = load_average()
     print(f"ns per decision, one observation (C: best of {args.repeats} x {args.calls} calls, cc {args.cflags}; "
           f"Python: best of {args.repeats} x {python_calls}; load average {load:.2f})")  # fmt: skip
     print(f"equivalence: {N_OBS} observations per policy, C against RuntimePolicy.act (params cast to float32 there)\n")

@@ -16,7 +16,7 @@ nothing, so the figure is the algorithm's ceiling, which an array env's own cost
 Targets: RbfPolicy (10 per input) >= 300k env steps/s on ``DribbleVecEnv(256)``; on 16 lanes SarsaAAC on
 ``DribbleVecEnv`` >= 20x PPO and >= 3x DQN (the "SarsaAAC+DribbleVecEnv" column's ratios).
 
-Usage: ``python benchmarks/algo_speed.py [--steps 20000] [--n-envs 16] [--policy RbfPolicy] [--torch-threads 1]
+Usage: ``python -m benchmarks.speed.algo_speed [--steps 20000] [--n-envs 16] [--policy RbfPolicy] [--torch-threads 1]
 [--lanes 256] [--n-rbf 10 30 50] [--set trace_lambda=0.7 ...]`` (``--set``: SarsaAAC keyword arguments as Python
 literals; ``--n-rbf`` with no value skips the RBF cost growth, e.g. for ``--policy TilePolicy``)
 
@@ -28,8 +28,6 @@ from __future__ import annotations
 import argparse
 import ast
 import os
-import statistics
-import time
 
 # One BLAS thread: on a busy two-core machine OpenBLAS's own threads made SarsaAAC's small matrix products up to 70x
 # slower (256 lanes, RbfPolicy: 15 ms instead of 0.2 ms per forward pass). Set before numpy is imported.
@@ -45,6 +43,7 @@ from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
 
 import robocup_dribble  # noqa: E402
 from sb3_aac import DiscretizeParameterizedAction, FlattenParameterizedAction, SarsaAAC  # noqa: E402
+from benchmarks.speed.timing import load_average, median_microseconds, steps_per_second  # noqa: E402
 from sb3_aac.common.array_env import ArrayStep  # noqa: E402
 
 
@@ -116,21 +115,13 @@ def build(algo: str, env_id: str, n_envs: int, policy: str, policy_kwargs: dict 
     return DQN("MlpPolicy", env, buffer_size=100_000, seed=0, device="cpu")
 
 
-def steps_per_second(algo: str, env_id: str, n_envs: int, steps: int, policy: str, policy_kwargs: dict | None = None) -> float:
-    model = build(algo, env_id, n_envs, policy, policy_kwargs)
-    model.learn(min(1000, steps))  # warm-up: compiled kernels, first allocations
-    start = time.perf_counter()
-    model.learn(steps, reset_num_timesteps=False)
-    return steps / (time.perf_counter() - start)
+def training_rate(algo: str, env_id: str, n_envs: int, steps: int, policy: str, policy_kwargs: dict | None = None) -> float:
+    return steps_per_second(build(algo, env_id, n_envs, policy, policy_kwargs), steps, warmup=min(1000, steps))
 
 
 def predict_microseconds(model, obs: np.ndarray, repeats: int = 2000) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        model.predict(obs, deterministic=True)
-        times.append(time.perf_counter() - start)
-    return statistics.median(times) * 1e6
+    """Median of ``repeats`` single deterministic ``predict`` calls on ``obs``."""
+    return median_microseconds(lambda: model.predict(obs, deterministic=True), repeats)
 
 
 def main() -> None:
@@ -153,7 +144,7 @@ def main() -> None:
     print(
         f"{args.env}; torch threads {th.get_num_threads()}; {args.steps} steps per measurement; SarsaAAC {args.policy} "
         f"{SARSA_SETTINGS or ''}; "
-        f"load average {os.getloadavg()[0]:.1f}"
+        f"load average {load_average():.1f}"
     )
     print(
         "SarsaAAC: DummyVecEnv (SB3 step, tuples) and DribbleVecEnv (array path); PPO: DummyVecEnv of "
@@ -165,7 +156,7 @@ def main() -> None:
         "   (env steps/s)"
     )
     for n_envs in args.n_envs:
-        rates = {algo: steps_per_second(algo, args.env, n_envs, args.steps, args.policy) for algo in algos}
+        rates = {algo: training_rate(algo, args.env, n_envs, args.steps, args.policy) for algo in algos}
         array_rate = rates["SarsaAAC+DribbleVecEnv"]
         print(
             f"{n_envs:>6} {rates['SarsaAAC']:>10.0f} {rates['PPO']:>8.0f} {rates['DQN']:>8.0f} "
@@ -179,11 +170,11 @@ def main() -> None:
         print(f"\nSarsaAAC {args.policy} on DribbleVecEnv({lanes}), array path: cost growth with RBFs per input")
     base = None
     for n_rbf in args.n_rbf:
-        rate = steps_per_second("SarsaAAC+DribbleVecEnv", args.env, lanes, steps, args.policy, {"n_rbf": n_rbf})
+        rate = training_rate("SarsaAAC+DribbleVecEnv", args.env, lanes, steps, args.policy, {"n_rbf": n_rbf})
         base = base or rate
         relative = f"{base / rate:.2f}x the cost at {args.n_rbf[0]}"
         print(f"  {n_rbf:>3} RBFs/input: {rate:>9.0f} env steps/s  ({relative})", flush=True)
-    algorithm_only = steps_per_second("SarsaAAC+NullArrayEnv", args.env, lanes, steps, args.policy)
+    algorithm_only = training_rate("SarsaAAC+NullArrayEnv", args.env, lanes, steps, args.policy)
     print(f"SarsaAAC {args.policy} alone on the array path (NullArrayEnv, {lanes} lanes): {algorithm_only:.0f} env steps/s")
     obs = gym.make(args.env).reset(seed=0)[0]
     sarsa, dqn = build("SarsaAAC", args.env, 1, args.policy), build("DQN", args.env, 1, args.policy)

@@ -10,7 +10,7 @@ a ``Discrete`` grid of 4 types x 9 parameter values standing in for the dribblin
 of ``--repeats`` runs of ``--calls`` decisions, which damps a shared machine's noise; report the load average with
 the numbers.
 
-Usage: ``python benchmarks/runtime_speed.py [--quick] [--calls 5000] [--repeats 5]``
+Usage: ``python -m benchmarks.speed.runtime_speed [--quick] [--calls 5000] [--repeats 5]``
 
 Targets: <= 10 us per decision for the RBF policy with 10, 30 and 50 RBFs per input; <= 5 us at 50 RBFs
 per input with the default RBF window; <= 10 us for ``DeepPolicy`` (default networks, two hidden layers of 64);
@@ -22,8 +22,6 @@ from __future__ import annotations
 import argparse
 import os
 import tempfile
-import timeit
-from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -33,6 +31,7 @@ from gymnasium import spaces
 from stable_baselines3 import DQN
 
 import robocup_dribble
+from benchmarks.speed.timing import load_average, microseconds
 from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
 
 ENV_PROFILE = "v11"
@@ -51,11 +50,6 @@ class ObservationOnlyEnv(gym.Env):
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict]:
         return self.observation_space.sample(), 0.0, False, False, {}
-
-
-def microseconds(fn: Callable[[], Any], calls: int, repeats: int) -> float:
-    fn()  # warm-up (and numba compilation)
-    return min(timeit.repeat(fn, number=calls, repeat=repeats)) / calls * 1e6
 
 
 def sarsa_model(policy: str, train_steps: int, **policy_kwargs: Any) -> SarsaAAC:
@@ -77,8 +71,7 @@ def main(argv: list[str] | None = None) -> None:
     rng = np.random.default_rng(0)
     obs_space = robocup_dribble.DribbleEnv(profile=ENV_PROFILE).observation_space
     obs = rng.uniform(obs_space.low, obs_space.high).astype(np.float32)
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"us per decision, one observation (best of {args.repeats} x {args.calls} calls; load average {load:.2f})")
+    print(f"us per decision, one observation (best of {args.repeats} x {args.calls} calls; load average {load_average():.2f})")
 
     configs: list[tuple[str, dict[str, Any]]] = [
         ("RbfPolicy", {"n_rbf": n}) for n in ((10, 50) if args.quick else (10, 30, 50))
