@@ -53,9 +53,11 @@ class ObservationOnlyEnv(gym.Env):
 
 
 def sarsa_model(policy: str, train_steps: int, **policy_kwargs: Any) -> SarsaAAC:
+    """A SarsaAAC model trained ``train_steps`` env steps (0: its initial weights)."""
     env = robocup_dribble.DribbleVecEnv(8, profile=ENV_PROFILE)
     env.seed(0)
-    return SarsaAAC(policy, env, seed=0, policy_kwargs=policy_kwargs).learn(train_steps)
+    model = SarsaAAC(policy, env, seed=0, policy_kwargs=policy_kwargs)
+    return model.learn(train_steps) if train_steps > 0 else model
 
 
 def main(argv: list[str] | None = None) -> None:
