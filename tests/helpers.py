@@ -45,7 +45,7 @@ _SARSA_AAC_TAGS = (
 _PDQN_TAGS = ("train/actor_loss", "train/learning_rate", "train/actor_learning_rate")
 # Algorithms not (yet) in ALGOS, tested by their own files only: HybridPPO collects whole rollouts, so the feature
 # tests' exact step counts do not hold for it (tests/test_hppo_*.py cover its save/load, runs, logging and export).
-OWN_TESTS_ONLY = (HybridPPO,)
+OWN_TESTS_ONLY = {"hppo": HybridPPO}  # name (as ALGOS' cli) -> class
 # Every algorithm, and SarsaAAC with each policy: a new algorithm (or policy) joins the feature tests by one line.
 ALGOS = [
     # RbfPolicy first: the SarsaAAC case of ALGO_CLASSES.

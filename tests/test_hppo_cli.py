@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import ast
-import importlib.util
 import inspect
 import json
 from pathlib import Path
@@ -61,20 +60,18 @@ def test_rl_zoo3_registers_hppo_and_its_sampler() -> None:
     import optuna
 
     from sb3_aac.common.envs import ParameterizedTargetEnv
-    from sb3_aac.tune.zoo import convert_hppo_params, sample_hppo_params
+    from sb3_aac.tune.zoo import convert_params
+    from sb3_aac.zoo import register
 
-    spec = importlib.util.spec_from_file_location("rl_zoo3_train", ROOT / "examples" / "rl_zoo3_train.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    module.register()
+    register()
     import rl_zoo3.exp_manager
     import rl_zoo3.train
 
     assert rl_zoo3.train.ALGOS["hppo"] is HybridPPO
-    assert rl_zoo3.exp_manager.HYPERPARAMS_SAMPLER["hppo"] is sample_hppo_params
+    sample = rl_zoo3.exp_manager.HYPERPARAMS_SAMPLER["hppo"]
     study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=1))
     for _ in range(3):
         trial = study.ask()
-        kwargs = sample_hppo_params(trial, n_actions=0, n_envs=2, additional_args={})
-        assert convert_hppo_params(trial.params) == kwargs
+        kwargs = sample(trial, n_actions=0, n_envs=2, additional_args={})
+        assert convert_params("hppo", trial.params) == kwargs
         HybridPPO(env=ParameterizedTargetEnv(), seed=0, **{**kwargs, "n_steps": 16, "batch_size": 16}).learn(16)
