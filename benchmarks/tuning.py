@@ -50,6 +50,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from benchmarks import domains
 from benchmarks.presets import ENV_SHORT, tuning_spec
 from benchmarks.tuned import learner_name, sample_kwargs, tunable, tuned_dir
+from sb3_aac.common.output_files import pid_alive
 from sb3_aac.tune.storage import open_storage
 from sb3_aac.tune.study import FINISHED, median_pruner, tpe_sampler
 
@@ -169,16 +170,6 @@ def open_study(storage: BaseStorage, study: StudySpec, create: bool = False) -> 
     return loaded
 
 
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def fail_abandoned_trials(study: optuna.Study) -> list[int]:
     """Mark as failed the running trials of processes of this host that no longer exist (a killed run's); their
     numbers. Trials of live processes, and of other hosts, stay running."""
@@ -186,7 +177,7 @@ def fail_abandoned_trials(study: optuna.Study) -> list[int]:
     abandoned = []
     for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         attrs = trial.user_attrs
-        if attrs.get("host") == host and isinstance(attrs.get("pid"), int) and not _alive(attrs["pid"]):
+        if attrs.get("host") == host and isinstance(attrs.get("pid"), int) and not pid_alive(attrs["pid"]):
             with contextlib.suppress(RuntimeError, ValueError):  # another process marked it first
                 study._storage.set_trial_user_attr(trial._trial_id, "abandoned", True)
                 study._storage.set_trial_state_values(trial._trial_id, TrialState.FAIL)
