@@ -14,7 +14,7 @@ $(VENV)/.installed: pyproject.toml
 	$(PY) -m pip install -q -e ".[dev]"
 	touch $@
 
-# Under a minute: ~8,500 training episodes of TilePolicy (the CLI default), a greedy evaluation on 1,000 fresh
+# Under a minute: ~8,800 training episodes of TilePolicy (the CLI default), a greedy evaluation on 1,000 fresh
 # players, and one episode as a GIF.
 demo: install
 	$(PY) -m sb3_aac.cli train --env RoboCupDribblePaper-v0 --timesteps 150000 --seed 0 --out runs/demo
