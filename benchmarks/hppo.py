@@ -1,5 +1,5 @@
 """
-HybridPPO against SB3's PPO through :class:`~sb3_aac.FlattenParameterizedAction` at equal env steps (issue 18).
+HybridPPO against SB3's PPO through :class:`~sb3_aac.FlattenParameterizedAction` at equal env steps.
 
     PYTHONPATH=.:envs python -m benchmarks.hppo --domain platform --seeds 5 --steps 100000
     PYTHONPATH=.:envs python -m benchmarks.hppo --domain paper --seeds 5 --steps 50000

@@ -11,7 +11,7 @@ tests/test_c_runtime.py draws them). The C timer is compiled here with the machi
 
 Usage: ``python -m benchmarks.speed.c_runtime_speed [--quick] [--calls 200000] [--repeats 5] [--cflags "-O2"]``
 
-Target (issue 20): <= 1 us per decision in C for RbfPolicy with 10 RBFs per input, decisions identical to
+Target: <= 1 us per decision in C for RbfPolicy with 10 RBFs per input, decisions identical to
 ``RuntimePolicy.act`` (types identical, parameters within 1e-5: also tested in ``tests/test_c_runtime.py``).
 """
 

@@ -1,6 +1,6 @@
 """
 Training throughput (env steps per second) of HybridPPO next to SB3's PPO on the same env with the same network
-sizes (issue 18's target: HybridPPO within 1.5x of PPO, i.e. ratio >= 0.67).
+sizes (the target: HybridPPO within 1.5x of PPO, i.e. ratio >= 0.67).
 
 Both learn ``--env`` in SB3's ``DummyVecEnv`` with ``--n-envs`` envs and the same rollout shape (256 steps per env,
 minibatches of 256, 10 epochs): HybridPPO on the env's own Tuple actions, PPO through

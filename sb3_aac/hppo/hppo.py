@@ -281,7 +281,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
         return True
 
     def _bootstrap_truncated(self, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]]) -> None:
-        """Add ``gamma * V(terminal observation)`` to the rewards of lanes cut by a time limit (SB3 issue #633)."""
+        """Add ``gamma * V(terminal observation)`` to the rewards of lanes cut by a time limit (as SB3 does, https://github.com/DLR-RM/stable-baselines3/issues/633)."""
         lanes = [
             i
             for i in np.flatnonzero(dones)
