@@ -283,6 +283,30 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
             process.join(5)
 
 
+def run_in_pool(function: Callable[..., tuple[Any, ...]], tasks: Sequence[tuple[Any, ...]], workers: int,
+                on_result: Callable[..., None]) -> None:  # fmt: skip
+    """
+    ``on_result(*function(*task))`` for every task, in this process (``workers <= 1``) or in a pool of ``workers``
+    spawned processes (each pinned to one BLAS thread and ending with this process), as the tasks finish. On any
+    exception (Ctrl-C included) the workers are stopped before it propagates.
+    """
+    if workers <= 1:
+        for task in tasks:
+            on_result(*function(*task))
+        return
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker, initargs=(os.getpid(),)) as pool:
+        pending = {pool.submit(function, *task) for task in tasks}
+        try:
+            while pending:
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    on_result(*future.result())
+        except BaseException:
+            _stop_workers(pool)
+            raise
+
+
 def estimated_cost(cell: Cell) -> float:
     """Rough seconds of a cell (to start the longest first, so two workers finish together)."""
     if cell.algo == "Reference":
@@ -338,21 +362,8 @@ def run_grid(
     try:
         if engine is not None:
             engine.run(todo, out, record)
-        elif workers <= 1:
-            for cell in todo:
-                record(*run_cell_safely(cell.to_dict(), str(out)))
         else:
-            context = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker, initargs=(os.getpid(),)) as pool:
-                pending = {pool.submit(run_cell_safely, cell.to_dict(), str(out)) for cell in todo}
-                try:
-                    while pending:
-                        finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                        for future in finished:
-                            record(*future.result())
-                except BaseException:
-                    _stop_workers(pool)
-                    raise
+            run_in_pool(run_cell_safely, [(cell.to_dict(), str(out)) for cell in todo], workers, record)
     finally:
         bar.close()
     return status

@@ -27,7 +27,7 @@ from typing import Any, Literal
 import numpy as np
 from scipy import stats
 
-from sb3_aac.common.statistics import welch_test
+from sb3_aac.common.statistics import scores_sample, welch_test
 
 MIN_SEEDS = 10  # seeds per side below which no comparison or target verdict is given (headline pairs)
 ALPHA = 0.05
@@ -82,15 +82,6 @@ class TargetCheck:
         return asdict(self)
 
 
-def _scores(values: Any, name: str) -> np.ndarray:
-    array = np.asarray(values, dtype=float)
-    if array.ndim != 1:
-        raise ValueError(f"{name} must be one score per seed (a 1-D sequence), got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise ValueError(f"{name} must be finite, got {array.tolist()}")
-    return array
-
-
 def _check_alpha(alpha: float) -> None:
     if not 0.0 < alpha < 1.0:
         raise ValueError(f"alpha must be in (0, 1), got {alpha}")
@@ -103,7 +94,7 @@ def iqm(values: np.ndarray, axis: int = -1) -> np.ndarray:
 
 def probability_of_improvement(a: Any, b: Any) -> float:
     """``P(X > Y) + 0.5 P(X = Y)`` over all pairs (X from ``a``, Y from ``b``): rliable's probability of improvement."""
-    a, b = _scores(a, "a"), _scores(b, "b")
+    a, b = scores_sample(a, "a"), scores_sample(b, "b")
     if len(a) == 0 or len(b) == 0:
         raise ValueError("probability_of_improvement needs at least one score per side")
     return float(_poi(a[None, :], b[None, :])[0])
@@ -128,7 +119,7 @@ def bootstrap_differences(
     """Percentile bootstrap CIs (:data:`CONFIDENCE`) of ``mean(a) - mean(b)``, ``IQM(a) - IQM(b)`` and the probability
     of improvement of ``a`` over ``b``; ``a`` and ``b`` are resampled independently (the seeds are independent runs)
     from ``numpy.random.default_rng(seed)``, so the same inputs and seed give the same intervals."""
-    a, b = _scores(a, "a"), _scores(b, "b")
+    a, b = scores_sample(a, "a"), scores_sample(b, "b")
     if len(a) == 0 or len(b) == 0:
         raise ValueError("bootstrap_differences needs at least one score per side")
     if n_resamples < 1:
@@ -165,7 +156,7 @@ def compare(a: Any, b: Any, alpha: float = ALPHA, min_seeds: int = MIN_SEEDS, se
     "B better" when Welch's two-sided test on the difference of means rejects at ``alpha`` (the sign of the mean
     difference says which), else "no significant difference". The bootstrap intervals (``seed``) never decide.
     """
-    a, b = _scores(a, "a"), _scores(b, "b")
+    a, b = scores_sample(a, "a"), scores_sample(b, "b")
     outcome, t, p = _decide(a, b, alpha, min_seeds)
     cis = bootstrap_differences(a, b, seed)
     return Comparison(
@@ -187,7 +178,7 @@ def compare(a: Any, b: Any, alpha: float = ALPHA, min_seeds: int = MIN_SEEDS, se
 
 def verdict(a: Any, b: Any, alpha: float = ALPHA, min_seeds: int = MIN_SEEDS) -> Outcome:
     """The outcome of :func:`compare` without its bootstrap intervals (cheap enough to call thousands of times)."""
-    return _decide(_scores(a, "a"), _scores(b, "b"), alpha, min_seeds)[0]
+    return _decide(scores_sample(a, "a"), scores_sample(b, "b"), alpha, min_seeds)[0]
 
 
 def target_verdict(
@@ -205,7 +196,7 @@ def target_verdict(
     target; "not met" when the opposite one-sided test rejects; "not shown" when neither does; "too few seeds" with
     fewer than ``min_seeds`` scores. Scores without any spread count as exact (a test of a constant cannot err).
     """
-    values = _scores(values, "values")
+    values = scores_sample(values, "values")
     _check_alpha(alpha)
     if direction not in ("at least", "at most"):
         raise ValueError(f"direction must be 'at least' or 'at most', got {direction!r}")

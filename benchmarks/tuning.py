@@ -28,13 +28,11 @@ from __future__ import annotations
 
 import contextlib
 import fnmatch
-import multiprocessing
 import os
 import socket
 import time
 import traceback
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -275,23 +273,9 @@ Report = Callable[[str, str, str], None]
 
 
 def _run_local(tasks: Sequence[Task], workers: int, report: Report) -> None:
-    from benchmarks.execution import _init_worker, _stop_workers
+    from benchmarks.execution import run_in_pool
 
-    if workers <= 1:
-        for task in tasks:
-            report(*run_trial(*task))
-        return
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker, initargs=(os.getpid(),)) as pool:
-        pending = {pool.submit(run_trial, *task) for task in tasks}
-        try:
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for future in finished:
-                    report(*future.result())
-        except BaseException:
-            _stop_workers(pool)
-            raise
+    run_in_pool(run_trial, tasks, workers, report)
 
 
 def _run_ray(tasks: Sequence[Task], engine: Any, report: Report) -> None:

@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 
 
-def _sample(values: Any, name: str) -> np.ndarray:
+def scores_sample(values: Any, name: str) -> np.ndarray:
+    """``values`` as a float array. :raises ValueError: unless it is a 1-D sequence of finite scores."""
     array = np.asarray(values, dtype=float)
     if array.ndim != 1:
         raise ValueError(f"{name} must be a 1-D sequence of scores, got shape {array.shape}")
@@ -29,7 +30,7 @@ def welch_test(a: Any, b: Any) -> tuple[float, float]:
     """
     from scipy import stats
 
-    a, b = _sample(a, "a"), _sample(b, "b")
+    a, b = scores_sample(a, "a"), scores_sample(b, "b")
     if len(a) < 2 or len(b) < 2:
         raise ValueError(f"Welch's test needs at least 2 scores per side, got {len(a)} and {len(b)}")
     if np.ptp(a) == 0 and np.ptp(b) == 0:
@@ -46,7 +47,7 @@ def mean_interval(values: Any, confidence: float = 0.95) -> tuple[float, float]:
     """
     from scipy import stats
 
-    x = _sample(values, "values")
+    x = scores_sample(values, "values")
     if len(x) < 2:
         raise ValueError(f"a confidence interval of a mean needs at least 2 values, got {len(x)}")
     if not 0.0 < confidence < 1.0:
