@@ -11,6 +11,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from gymnasium import spaces
 
 from sb3_aac import MPDQN, PDQN, HybridPPO, SarsaAAC
+from sb3_aac.common.envs import ParameterizedTargetEnv
 
 POLICIES = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy", "DeepPolicy"]
 LAYOUTS = ["nested", "flat", "shared", "oneof"]
@@ -94,3 +95,17 @@ class PoisonWeights(BaseCallback):
             with th.no_grad():
                 next(self.module(self.model).parameters()).view(-1)[0] = float("nan")
         return True
+
+
+class PoisonedRewardEnv(ParameterizedTargetEnv):
+    """Returns a NaN reward from step ``poison_at`` on; records whether every action it received was finite."""
+
+    def __init__(self, poison_at: int):
+        super().__init__(loss_threshold=0.0)
+        self.poison_at, self.count, self.all_finite = poison_at, 0, True
+
+    def step(self, action):
+        self.all_finite &= bool(np.isfinite(np.concatenate([np.ravel(p) for p in action[1]])).all())
+        obs, reward, terminated, truncated, info = super().step(action)
+        self.count += 1
+        return obs, (np.nan if self.count >= self.poison_at else reward), terminated, truncated, info

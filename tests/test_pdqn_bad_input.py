@@ -7,7 +7,7 @@ from gymnasium import spaces
 
 from sb3_aac import MPDQN, PDQN
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from tests.helpers import PoisonWeights
+from tests.helpers import PoisonedRewardEnv, PoisonWeights
 
 SMALL = dict(learning_starts=50, batch_size=16, policy_kwargs=dict(net_arch=[16]))
 
@@ -74,20 +74,6 @@ def test_bad_hyperparameters(kwargs, match):
 def test_unknown_policy():
     with pytest.raises(ValueError, match="Policy RbfPolicy unknown"):
         PDQN("RbfPolicy", ParameterizedTargetEnv())
-
-
-class PoisonedRewardEnv(ParameterizedTargetEnv):
-    """Returns a NaN reward from step ``poison_at`` on; records whether every action it received was finite."""
-
-    def __init__(self, poison_at: int):
-        super().__init__(loss_threshold=0.0)
-        self.poison_at, self.count, self.all_finite = poison_at, 0, True
-
-    def step(self, action):
-        self.all_finite &= bool(np.isfinite(np.concatenate([np.ravel(p) for p in action[1]])).all())
-        obs, reward, terminated, truncated, info = super().step(action)
-        self.count += 1
-        return obs, (np.nan if self.count >= self.poison_at else reward), terminated, truncated, info
 
 
 @pytest.mark.parametrize("algo", [PDQN, MPDQN])
