@@ -48,6 +48,7 @@ from benchmarks.tuned import TUNED_PARAMS, TUNING_RECORD, tuned_cell  # noqa: E4
 from benchmarks.wall_clock import TrainingTimeLimit  # noqa: E402
 from benchmarks.zoo_hyperparams import settings  # noqa: E402
 from robocup_dribble.evaluation import evaluate_dribbling  # noqa: E402
+from sb3_aac.common.episode_stats import EpisodeKeywordsCallback  # noqa: E402
 
 PARENT_POLL_SECONDS = 0.2  # how often a worker checks that the driver still lives
 
@@ -84,8 +85,7 @@ def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
         _, policy, policy_kwargs = SARSA_CONFIGS[cell.config]
         overrides = dict(cell.overrides)
         env = domains.train_env(cell.env_id, overrides.pop("n_envs", SARSA_N_ENVS), cell.seed)
-        if not domains.is_dribbling(cell.env_id):
-            overrides.setdefault("info_keywords", ())
+        overrides.setdefault("info_keywords", domains.info_keywords(cell.env_id))
         policy_kwargs = {**policy_kwargs, **overrides.pop("policy_kwargs", {})}
         model = SarsaAAC(policy, env, seed=cell.seed, policy_kwargs=policy_kwargs, **overrides)
         return model, model, 100  # dump the rollout/train keys every 100 episodes
@@ -94,8 +94,7 @@ def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
 
         kwargs = peer_settings(cell)
         env = domains.train_env(cell.env_id, kwargs.pop("n_envs"), cell.seed)
-        if not domains.is_dribbling(cell.env_id):
-            kwargs.setdefault("info_keywords", ())
+        kwargs.setdefault("info_keywords", domains.info_keywords(cell.env_id))
         model = {"PDQN": PDQN, "MPDQN": MPDQN}[cell.algo]("MlpPolicy", env, seed=cell.seed, device="cpu", **kwargs)
         return model, model, 100
     from benchmarks.adapters import adapter_for, build_baseline
@@ -198,6 +197,8 @@ def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
         callback = EvalCallback(policy, cell.env_id, cell.eval_every, cell.eval_episodes)
         limit = TrainingTimeLimit(cell.seconds, callback) if cell.seconds else None
         callbacks: list[BaseCallback] = [callback, *([limit] if limit else [])]
+        if cell.algo in BASELINES:  # SB3's algorithms log the env's info keys through a callback, ours themselves
+            callbacks.append(EpisodeKeywordsCallback(domains.info_keywords(cell.env_id)))
         model.learn(cell.budget, callback=CallbackList(callbacks), log_interval=log_interval)
         if callback.curve[-1]["env_steps"] < model.num_timesteps:
             callback.evaluate()  # the curve ends where training ended

@@ -82,17 +82,35 @@ def test_tiny_grid_writes_cells_models_and_tensorboard(tiny_run):
     assert len(results[cells[1].cell_id]["curve"]) > 2
 
 
-def test_eval_metrics_reach_tensorboard(tiny_run):
+def scalar_tags(folder):
     from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
-    out, cells, *_ = tiny_run
-    events = EventAccumulator(str(out / "tb" / cells[1].cell_id))
+    events = EventAccumulator(str(folder))
     events.Reload()
-    tags = set(events.Tags()["scalars"])
+    return events, set(events.Tags()["scalars"])
+
+
+def test_eval_metrics_reach_tensorboard(tiny_run):
+    out, cells, *_ = tiny_run
+    events, tags = scalar_tags(out / "tb" / cells[1].cell_id)
     assert {"eval/distance_mean", "eval/reach20_share", "eval/ball_loss_rate", "eval/final_distance_mean"} <= tags
     result = json.loads((out / "cells" / f"{cells[1].cell_id}.json").read_text())
     logged = [e.value for e in events.Scalars("eval/distance_mean")]
     assert np.allclose(logged, [p["distance_mean"] for p in result["curve"]], atol=1e-4)
+
+
+def test_sb3_baselines_log_the_env_metric_through_the_callback(tiny_run):
+    """The PPO and DQN cells (SB3's algorithms on the batched dribbling VecEnv) log rollout/ep_distance_mean and
+    rollout/ep_ball_lost_mean (benchmarks.execution adds EpisodeKeywordsCallback), at least wherever ep_rew_mean is."""
+    out, cells, *_ = tiny_run
+    for cell in cells[3:]:
+        events, tags = scalar_tags(out / "tb" / cell.cell_id)
+        assert {"rollout/ep_distance_mean", "rollout/ep_ball_lost_mean"} <= tags, cell.cell_id
+        distance_steps = {e.step for e in events.Scalars("rollout/ep_distance_mean")}
+        reward_steps = {e.step for e in events.Scalars("rollout/ep_rew_mean")} if "rollout/ep_rew_mean" in tags else set()
+        assert reward_steps <= distance_steps
+        assert all(0.0 <= e.value <= 1.0 for e in events.Scalars("rollout/ep_ball_lost_mean"))
+        assert all(np.isfinite(e.value) for e in events.Scalars("rollout/ep_distance_mean"))  # metres along +x
 
 
 def test_rerun_skips_finished_cells_without_rewriting_them(tiny_run):
