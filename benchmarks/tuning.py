@@ -284,28 +284,26 @@ def _run_ray(tasks: Sequence[Task], engine: Any, report: Report) -> None:
 
     from benchmarks.engines import WORKER_ENV, _python_path
 
-    started_here = engine._connect()
-    remote = ray.remote(run_trial).options(
-        num_cpus=1,
-        max_retries=engine.max_retries,
-        retry_exceptions=False,
-        runtime_env={"env_vars": {**WORKER_ENV, **_python_path()}},
-    )
-    pending = {remote.remote(*task): task for task in tasks}
-    try:
-        while pending:
-            finished, _ = ray.wait(list(pending), num_returns=1)
-            task = pending.pop(finished[0])
-            try:
-                report(*ray.get(finished[0]))
-            except ray.exceptions.RayError as error:
-                report(StudySpec(**task[0]).name, "failed", f"Ray could not run the trial: {error}")
-    finally:
-        for ref in pending:
-            with contextlib.suppress(Exception):
-                ray.cancel(ref, force=True)
-        if started_here:
-            ray.shutdown()
+    with engine.connected():
+        remote = ray.remote(run_trial).options(
+            num_cpus=1,
+            max_retries=engine.max_retries,
+            retry_exceptions=False,
+            runtime_env={"env_vars": {**WORKER_ENV, **_python_path()}},
+        )
+        pending = {remote.remote(*task): task for task in tasks}
+        try:
+            while pending:
+                finished, _ = ray.wait(list(pending), num_returns=1)
+                task = pending.pop(finished[0])
+                try:
+                    report(*ray.get(finished[0]))
+                except ray.exceptions.RayError as error:
+                    report(StudySpec(**task[0]).name, "failed", f"Ray could not run the trial: {error}")
+        finally:
+            for ref in pending:
+                with contextlib.suppress(Exception):
+                    ray.cancel(ref, force=True)
 
 
 def prepare(studies: Sequence[StudySpec], storage: str | None, folder: Path) -> dict[str, str]:
