@@ -269,7 +269,7 @@ def explicit_cases(good: Path, tiles: Path) -> list[tuple[str, bytes, str | None
 
         return change
 
-    edit("version 4", set_in("version", value=4), "unknown format version 4")
+    edit("version 5", set_in("version", value=5), "unknown format version 5")
     edit("format other", set_in("format", value="other"), "format")
     edit("version 1", set_in("version", value=1), "unknown format version 1")
     edit("version 2.0", set_in("version", value=2.0), None)  # Python: 2.0 == 2
