@@ -5,11 +5,12 @@
  * every file the Python reference reader (`sb3_aac.runtime.RuntimePolicy`) reads: format `sb3-aac-policy`
  * versions 2 to 4, scaled-input or Gaussian-RBF features (with or without the RBF window) under a linear or
  * one-tanh-layer head, tile coding, (version 3) the feed-forward networks of a DeepPolicy or HybridPPO (linear,
- * layer-norm and tanh/relu/leaky-relu layers), and (version 4) P-DQN's and MP-DQN's parameter actor and Q network. It checks a file as that reader does (length, magic bytes, SHA-256,
- * strict UTF-8 JSON header, format and version, every field and array, finite values) and never reads past
- * the buffer it is given; then `aacp_act` returns the decision `RuntimePolicy.act` returns: the same action
- * type, and that type's parameters in the env's units (clipped to their bounds) within 1e-5. The file
- * format is docs/export-format.md of sb3-aac; `sb3-aac c-header` prints where this header is installed.
+ * layer-norm and tanh/relu/leaky-relu layers), and (version 4) P-DQN's and MP-DQN's parameter actor and Q
+ * network. It checks a file as that reader does (length, magic bytes, SHA-256, strict UTF-8 JSON header, format
+ * and version, every field and array, finite values) and never reads past the buffer it is given; then
+ * `aacp_act` returns the decision `RuntimePolicy.act` returns: the same action type, and that type's parameters
+ * in the env's units (clipped to their bounds) within 1e-5. The file format is docs/export-format.md of sb3-aac;
+ * `sb3-aac c-header` prints where this header is installed.
  *
  * Use (single-header style): include it anywhere for the declarations, and in exactly one C or C++ file
  *
