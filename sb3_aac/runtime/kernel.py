@@ -205,7 +205,7 @@ def network_kernel_arguments(
             n_out = len(weight) if kind == "linear" and weight is not None else size
             layer_records += [LAYER_CODES.index(kind), size, n_out, put(weight), put(bias), put(np.array([constant]))]
             size, width = n_out, max(width, n_out)
-    multi_pass = int(pdqn and net.multi_pass)  # type: ignore[union-attr]  # pdqn: a PDQNForward
+    multi_pass = int(isinstance(net, PDQNForward) and net.multi_pass)
     fields = [d, n_types, len(net.columns), multi_pass, *starts]
     meta = np.array([*fields, *offsets, *network_records, *layer_records], dtype=np.int64)
     return np.concatenate(segments), meta, width
