@@ -29,7 +29,6 @@ class Algo:
     kwargs: dict[str, Any] = field(default_factory=dict)  # small, fast settings for tests
     own_tags: tuple[str, ...] = ()  # the log keys of its own (besides tests/test_logging.py's COMMON_TAGS)
     log_often: dict[str, Any] = field(default_factory=dict)  # settings under which log_interval alone sets the dumps
-    exported: bool = False  # whether ``sb3-aac train --out`` also writes the policy as a .aacp file
 
     @property
     def id(self) -> str:
@@ -51,7 +50,7 @@ OWN_TESTS_ONLY = {"hppo": HybridPPO}  # name (as ALGOS' cli) -> class
 ALGOS = [
     # RbfPolicy first: the SarsaAAC case of ALGO_CLASSES.
     *(
-        Algo(SarsaAAC, name, "sarsa_aac", own_tags=_SARSA_AAC_TAGS, log_often=dict(log_min_timesteps=0), exported=True)
+        Algo(SarsaAAC, name, "sarsa_aac", own_tags=_SARSA_AAC_TAGS, log_often=dict(log_min_timesteps=0))
         for name in ("RbfPolicy", "MlpPolicy", "RbfMlpPolicy", "TilePolicy", "DeepPolicy")
     ),
     Algo(PDQN, "MlpPolicy", "pdqn", PDQN_SMALL, _PDQN_TAGS),
