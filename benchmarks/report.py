@@ -81,7 +81,8 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         rel_fig = "fig_reliability.png" if reliability else None
 
     lines = [
-        "# Benchmark: SarsaAAC against P-DQN, MP-DQN and SB3 baselines on RoboCup dribbling and Platform",
+        "# Benchmark: SarsaAAC against P-DQN, MP-DQN, HybridPPO and SB3 baselines on RoboCup dribbling, Platform and the "
+        "hybrid-action domains",
         "",
         f"Generated {time.strftime('%Y-%m-%d %H:%M')} from {len(results)} cell files in `{out}`.",
         "",
@@ -137,7 +138,7 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
             "",
         ]
     if final:
-        lines += ["### Final distance of every config", "", f"![final]({final})", ""]
+        lines += ["### Final score of every config", "", f"![final]({final})", ""]
     lines += ["## Reliability test (paper Figs. 9-10)", ""]
     if reliability:
         lines += [

@@ -16,6 +16,11 @@ HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
 ZOO_KEYS = ("n_timesteps", "policy", "env_wrapper")
 
 
+def has_settings(algo: str, env_id: str) -> bool:
+    """Whether ``hyperparams/<algo>.yml`` has an entry for ``env_id``."""
+    return env_id in yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())
+
+
 def settings(algo: str, env_id: str) -> dict[str, Any]:
     """The entry of ``env_id`` in ``hyperparams/<algo>.yml`` without rl-zoo3's own keys (``n_envs`` stays)."""
     entry = dict(yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())[env_id])
