@@ -47,7 +47,8 @@ from benchmarks.presets import (  # noqa: E402
 from benchmarks.provenance import cell_provenance  # noqa: E402
 from benchmarks.tuned import TUNED_PARAMS, TUNING_RECORD, tuned_cell  # noqa: E402
 from benchmarks.wall_clock import TrainingTimeLimit  # noqa: E402
-from benchmarks.zoo_hyperparams import has_settings, settings  # noqa: E402
+from benchmarks.reference_init import with_reference_start  # noqa: E402
+from benchmarks.zoo_hyperparams import has_settings, settings, zoo_env  # noqa: E402
 from robocup_dribble.evaluation import evaluate_dribbling  # noqa: E402
 from sb3_aac.common.episode_stats import EpisodeKeywordsCallback  # noqa: E402
 
@@ -72,8 +73,9 @@ def peer_settings_source(cell: Cell) -> str:
     fallback (:data:`PEERS`), or the algorithm's defaults."""
     spec = PEERS[cell.algo]
     path = f"hyperparams/{spec['yml']}.yml"
+    start = ", the reference code's initial parameter policy" if cell.env_id in spec.get("reference_start", ()) else ""
     if has_settings(spec["yml"], cell.env_id):
-        return f"{path} ({cell.env_id})"
+        return f"{path} ({cell.env_id}{start})"
     if spec["fallback"] is not None:
         return f"{path} ({spec['fallback']}; no entry for {cell.env_id})"
     return f"{cell.algo} defaults (no entry for {cell.env_id} in {path})"
@@ -108,10 +110,17 @@ def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
     if cell.algo in PEERS:
         import sb3_aac
 
-        kwargs = peer_settings(cell)
-        env = domains.train_env(cell.env_id, kwargs.pop("n_envs"), cell.seed)
+        spec, kwargs = PEERS[cell.algo], peer_settings(cell)
+        n_envs = kwargs.pop("n_envs")
+        if domains.is_dribbling(cell.env_id) or not has_settings(spec["yml"], cell.env_id):
+            env = domains.train_env(cell.env_id, n_envs, cell.seed)
+        else:  # the env of its own entry: the entry's env_wrapper chain (Goal: the reference's reward scale too)
+            env = zoo_env(spec["yml"], cell.env_id, n_envs, cell.seed)
         kwargs.setdefault("info_keywords", domains.info_keywords(cell.env_id))
-        model = getattr(sb3_aac, cell.algo)("MlpPolicy", env, seed=cell.seed, device="cpu", **kwargs)
+        policy: Any = "MlpPolicy"
+        if cell.env_id in spec.get("reference_start", ()):
+            policy, kwargs = with_reference_start(kwargs)
+        model = getattr(sb3_aac, cell.algo)(policy, env, seed=cell.seed, device="cpu", **kwargs)
         return model, model, _log_interval(model, cell.algo)
     from benchmarks.adapters import adapter_for, build_baseline
 

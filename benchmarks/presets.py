@@ -93,10 +93,21 @@ REPLAY_RATIO_ONE = {"train_freq": 1, "gradient_steps": OFF_POLICY_ENVS}
 # step). An env without an entry in the yml gets the entry of env "fallback" (None: the algorithm's constructor
 # defaults; P-DQN's Platform and Goal entries carry their env's initial parameters, so they do not carry over).
 # HybridPPO's entries are one rule (hppo.yml: the PPO baseline's rollout shape, 8 lanes x 256 steps, minibatches of
-# 256, and a type-entropy bonus of 0.01), so its Platform entry is the rule for the envs it does not list.
+# 256, and a type-entropy bonus of 0.01), so its Platform entry is the rule for the envs it does not list. On an
+# episodic domain with its own entry a peer trains on that entry's env_wrapper chain, as rl-zoo3 does (the same
+# observations as the domain's evaluation env; on Goal the reference's reward scale of 1/50), and on the ids of
+# "reference_start" it starts its parameter actor at the reference MP-DQN code's function (benchmarks.reference_init):
+# with the yml's constant start MP-DQN never scored on Goal (P(goal) 0.0 after 60k steps, 0.684 with the reference's;
+# docs/pdqn.md).
 PEERS: dict[str, dict[str, Any]] = {
     "PDQN": {"yml": "pdqn", "n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE), "fallback": None},
-    "MPDQN": {"yml": "mpdqn", "n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE), "fallback": None},
+    "MPDQN": {
+        "yml": "mpdqn",
+        "n_envs": OFF_POLICY_ENVS,
+        "kwargs": dict(REPLAY_RATIO_ONE),
+        "fallback": None,
+        "reference_start": ("Goal-v0",),
+    },
     "HybridPPO": {"yml": "hppo", "n_envs": 8, "kwargs": {}, "fallback": PLATFORM_ID},
 }
 ON_POLICY_PEERS = ("HybridPPO",)

@@ -482,6 +482,27 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
         assert (tmp_path / name).stat().st_size > 10_000, name
 
 
+def test_the_peers_take_their_yml_entry_or_the_stated_fallback():
+    """MP-DQN on Goal: the reference settings, env (features, reward scale) and start; HybridPPO on Moving: hppo.yml's
+    Platform entry (the rule of all its entries) on the domain's env; MP-DQN on Moving: its defaults."""
+    from benchmarks.execution import build_model
+    from benchmarks.reference_init import PassthroughPolicy
+    from hybrid_domains.reference_inputs import ScaleReward
+
+    goal, _, _ = build_model(Cell("Goal-v0", "MPDQN", "mpdqn", 0, 1000))
+    assert isinstance(goal.policy, PassthroughPolicy) and goal.gamma == 0.95 and goal.gradient_steps == 4
+    lane = goal.get_env().envs[0]
+    while not isinstance(lane, ScaleReward):
+        lane = lane.env
+    assert lane.scale == 0.02
+    assert goal.observation_space == domains.episodic_env("Goal-v0").observation_space  # scored on what it saw
+    hppo, _, _ = build_model(Cell("Moving-v0", "HybridPPO", "hybridppo", 0, 1000))
+    assert (hppo.n_envs, hppo.n_steps, hppo.batch_size, hppo.ent_coef) == (8, 256, 256, 0.01)
+    assert hppo.observation_space == domains.episodic_env("Moving-v0").observation_space
+    moving, _, _ = build_model(Cell("Moving-v0", "MPDQN", "mpdqn", 0, 1000))
+    assert (moving.gamma, moving.learning_starts, moving.buffer_size) == (0.99, 500, 100_000)  # MPDQN's defaults
+
+
 def test_the_finished_cells_of_the_results_are_cells_of_the_full_preset():
     """Adding learners and domains keeps every finished cell's id and definition: a rerun skips them."""
     out = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
