@@ -3,8 +3,10 @@
 Every number here is our choice; the reasons are next to them. A cell is plain data (:class:`Cell`), so it can be
 sent to a worker process and written into its result file as is.
 
-Three domains (:mod:`benchmarks.domains`): the dribbling envs of both server eras and Platform-v0 (PyPI
-``hybrid-platform``, Masson et al.'s Platform), each with its own budget.
+Seven domains (:mod:`benchmarks.domains`): the dribbling envs of both server eras, Platform-v0 (PyPI
+``hybrid-platform``, Masson et al.'s Platform) and the ``hybrid_domains`` Goal-v0, Moving-v0, Sliding-v0 and
+CatchPoint-v0, each with its own budget. What a preset costs: ``python -m benchmarks.run --preset P --estimate``
+(:mod:`benchmarks.cost`, from :data:`STEPS_PER_SECOND` and :data:`ENV_STEP_SECONDS`).
 
 SarsaAAC configs (:data:`SARSA_CONFIGS`): the recommended ``TilePolicy`` with its defaults, ``DeepPolicy``, and the
 paper's three families (Uc-Cetina 2013, Figs. 5-7), all other hyperparameters at the SarsaAAC defaults (16 lanes):
@@ -23,7 +25,8 @@ one score per action type then every parameter) or :class:`~sb3_aac.DiscretizePa
 per parameter). **Fairness rule**: every off-policy learner (SAC, TD3, DDPG, DQN, P-DQN, MP-DQN) takes one gradient
 step per transition (SB3's default for SAC/TD3/DDPG with one env; ``n_envs`` lanes and ``gradient_steps=n_envs``), and
 otherwise keeps its documented defaults (SB3's, or the reference MP-DQN code's); none is tuned for these tasks, and
-neither is SarsaAAC (its defaults were chosen on several tasks, see its docstring).
+neither is SarsaAAC (its defaults were chosen on several tasks, see its docstring). The tuned twins
+(``<config>-tuned``) of the headline learners run the best settings of an equal-size study each (:mod:`benchmarks.tuning`).
 """
 
 from __future__ import annotations

@@ -10,6 +10,9 @@ steps of training x ``seeds`` tuning seeds per trial, the trial's value the mean
 ``env_steps / evaluations`` apart). The spaces are :mod:`benchmarks.tuned`'s: rl-zoo3's samplers for SB3's
 algorithms through the grid's action wrappers, sb3-aac's for SarsaAAC, P-DQN, MP-DQN and HybridPPO.
 
+Cost: ``python -m benchmarks.run --preset P --estimate`` prints the stage's core-hours beside the grid's
+(:func:`benchmarks.cost.trial_seconds`: every trial counted unpruned, an upper bound).
+
 Seeds: a trial trains with seeds :data:`TUNE_SEED`, ``TUNE_SEED + 1``, ... and is scored on the episodes of set
 :data:`TUNE_EVAL_SEED`; the grid trains with seeds 0-9 and is scored on sets 10,000 (curves) and 20,000 (final), so
 no episode or seed of the tuning is one the benchmark's verdicts are computed on.
