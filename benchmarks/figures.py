@@ -43,7 +43,7 @@ FAMILY_TITLES = {
 
 RELIABILITY_STYLE = {
     "sarsa_aac": ("#d94801", "best SarsaAAC"),
-    "peer": ("#006d2c", "best P-DQN/MP-DQN"),
+    "peer": ("#006d2c", "best parameterized peer"),
     "baseline": ("#6a51a3", "best baseline"),
     "handcoded": ("black", "hand-coded"),
 }

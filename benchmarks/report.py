@@ -144,7 +144,7 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         lines += [
             f"10,000 fresh players (a new player-type set for every episode, seed {reliability['seed']}), "
             "one episode each, greedy. "
-            "The policies are the best SarsaAAC cell, the best P-DQN/MP-DQN cell and the best SB3 baseline cell of each "
+            "The policies are the best SarsaAAC cell, the best parameterized-peer cell and the best SB3 baseline cell of each "
             "dribbling env (best config by mean final distance, "
             "then its best seed, both chosen on the final evaluation set, not on these players), and the hand-coded dribbler.",
             "",
