@@ -94,7 +94,7 @@ REPLAY_RATIO_ONE = {"train_freq": 1, "gradient_steps": OFF_POLICY_ENVS}
 # The parameterized peers: hyperparams/<yml>.yml's entry for the env, then n_envs and "kwargs". P-DQN / MP-DQN take
 # one gradient step per transition by the fairness rule (the reference MP-DQN code also takes one update per env
 # step). An env without an entry in the yml gets the entry of env "fallback" (None: the algorithm's constructor
-# defaults; P-DQN's Platform and Goal entries carry their env's initial parameters, so they do not carry over).
+# defaults; the P-DQN / MP-DQN entries carry their env's initial parameters, so they do not carry over).
 # HybridPPO's entries are one rule (hppo.yml: the PPO baseline's rollout shape, 8 lanes x 256 steps, minibatches of
 # 256, and a type-entropy bonus of 0.01), so its Platform entry is the rule for the envs it does not list. On an
 # episodic domain with its own entry a peer trains on that entry's env_wrapper chain, as rl-zoo3 does (the same
@@ -330,7 +330,7 @@ _PLATFORM_HEADLINE = [
     ("PPO", "ppo"),
 ]
 # Equal wall-clock budget: the headline learners train for the same seconds of one core, evaluations excluded
-# (benchmarks.wall_clock); 120 s is about the time TD3 needs for the 50k-step budget, and 60x SarsaAAC's.
+# (benchmarks.wall_clock); 120 s is about the time TD3 needs for the 50k-step budget, and 70x SarsaAAC's (TilePolicy).
 WALL_CLOCK_SECONDS = 120
 WALL_CLOCK_SEEDS = PAPER_SEEDS
 # The long budget of the dribbling envs, sized for the paper's episode counts: on the paper env (seed 0, 16 lanes)

@@ -465,7 +465,7 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
         "episodes to 0.7",
         "episodes to 1.5",
         "HybridPPO (Moving-v0): hyperparams/hppo.yml (Platform-v0; no entry for Moving-v0)",
-        "MPDQN (Goal-v0): hyperparams/mpdqn.yml (Goal-v0)",
+        "MPDQN (Goal-v0): hyperparams/mpdqn.yml (Goal-v0, the reference code's initial parameter policy)",
         "MPDQN (Moving-v0): MPDQN defaults (no entry for Moving-v0 in hyperparams/mpdqn.yml)",
         "`DeepPolicy` runs with `trace_lambda=0.8`",
     ):
