@@ -8,7 +8,10 @@ steps of training x ``seeds`` tuning seeds per trial, the trial's value the mean
 (:func:`sb3_aac.tune.study.tpe_sampler`, :func:`~sb3_aac.tune.study.median_pruner`: multivariate TPE after
 :data:`STARTUP_TRIALS` random trials; the median rule on ``evaluations`` greedy evaluations during training, spaced
 ``env_steps / evaluations`` apart). The spaces are :mod:`benchmarks.tuned`'s: rl-zoo3's samplers for SB3's
-algorithms through the grid's action wrappers, sb3-aac's for SarsaAAC, P-DQN and MP-DQN.
+algorithms through the grid's action wrappers, sb3-aac's for SarsaAAC, P-DQN, MP-DQN and HybridPPO.
+
+Cost: ``python -m benchmarks.run --preset P --estimate`` prints the stage's core-hours beside the grid's
+(:func:`benchmarks.cost.trial_seconds`: every trial counted unpruned, an upper bound).
 
 Seeds: a trial trains with seeds :data:`TUNE_SEED`, ``TUNE_SEED + 1``, ... and is scored on the episodes of set
 :data:`TUNE_EVAL_SEED`; the grid trains with seeds 0-9 and is scored on sets 10,000 (curves) and 20,000 (final), so
