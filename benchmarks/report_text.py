@@ -584,8 +584,7 @@ def method_section(results: list[dict[str, Any]]) -> list[str]:
                 + (f", Gaussian action noise sigma={cfg['action_noise_sigma']}" if "action_noise_sigma" in cfg else "")
             )
     lines += [
-        "- **SarsaAAC** runs with its defaults on 16 lanes; only the policy and its `hidden_units` / `n_rbf` change, and "
-        "`DeepPolicy` runs with `trace_lambda=0.8` (the setting of its figures in docs/sarsa_aac.md).",
+        "- **SarsaAAC** runs with its defaults on 16 lanes; only the policy and its `hidden_units` / `n_rbf` change.",
         "",
     ]
     return lines

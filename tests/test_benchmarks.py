@@ -459,7 +459,7 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
         "### Moving-v0 (gym-hybrid's Moving, hybrid_domains)",
         "final P(goal), IQM [95% CI]",
         "final mean return, IQM [95% CI]",
-        "DeepPolicy (trace_lambda 0.8)",
+        "DeepPolicy",
         "*MP-DQN, published* | - | - | - | 0.789",
         "*H-PPO, published* | - | - | - | 1.700",
         "episodes to 0.7",
@@ -467,12 +467,12 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
         "HybridPPO (Moving-v0): hyperparams/hppo.yml (Platform-v0; no entry for Moving-v0)",
         "MPDQN (Goal-v0): hyperparams/mpdqn.yml (Goal-v0, the reference code's initial parameter policy)",
         "MPDQN (Moving-v0): MPDQN defaults (no entry for Moving-v0 in hyperparams/mpdqn.yml)",
-        "`DeepPolicy` runs with `trace_lambda=0.8`",
+        "SarsaAAC** runs with its defaults on 16 lanes",
     ):
         assert needle in text, needle
     assert "Bester" in text and "0.987" not in text  # no Platform figures without Platform cells
     goal = text[text.index("- **Goal-v0**") :].split("\n- **")[0]
-    assert "best SarsaAAC config, DeepPolicy (trace_lambda 0.8)" in goal
+    assert "best SarsaAAC config, DeepPolicy" in goal
     assert "vs the best parameterized peer, MPDQN" in goal and "**SarsaAAC deep better**" in goal
     assert "against MP-DQN's published 0.789" in goal
     moving = text[text.index("- **Moving-v0**") :].split("\n- **")[0]
