@@ -169,6 +169,19 @@ def test_errors(capsys, argv: list[str], message: str) -> None:
     assert re.search(message, run_error(capsys, argv))
 
 
+def test_train_and_evaluate_on_the_perception_model(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "run"
+    assert main(["train", "--env", "RoboCupDribble-v0", "--timesteps", "300", "--n-envs", "2", "--perception", "match",
+                 "--eval-episodes", "10", "--out", str(out)]) == 0  # fmt: skip
+    assert json.loads((out / "run.json").read_text())["perception"] == "match"
+    assert main(["evaluate", "dribbler", "--episodes", "10", "--perception", "match"]) == 0
+    assert "(perception match)" in capsys.readouterr().out
+    assert "is an option of the dribbling envs" in run_error(
+        capsys, ["train", "--env", "sb3_aac/ParameterizedTarget-v0", "--policy", "MlpPolicy", "--timesteps", "10",
+                 "--perception", "match"],
+    )  # fmt: skip
+
+
 def test_errors_on_files(trained: Path, tmp_path: Path, capsys) -> None:
     (tmp_path / "notes.txt").write_text("hello")
     assert "must be a .zip or .aacp" in run_error(capsys, ["evaluate", str(tmp_path / "notes.txt")])

@@ -115,17 +115,25 @@ class DribbleEnv(gym.Env):
     ## Arguments
 
     ``profile`` (``"v19"``, ``"v11"`` or a ServerProfile), ``noise`` (False switches every noise source off),
-    ``render_mode`` (``"human"``, ``"rgb_array"`` or None) and the fields of :class:`DribbleTask` as keywords.
+    ``render_mode`` (``"human"``, ``"rgb_array"`` or None), ``perception`` (``"full"``, the default: the observation
+    and the skills' commands are computed from the exact state; ``"match"``: from the player's estimate kept from
+    what rcssserver's see and sense_body would tell it, :mod:`robocup_dribble.perception`, while physics, reward and
+    termination run on the true state) and the fields of :class:`DribbleTask` as keywords.
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}  # noqa: RUF012  (Gymnasium declares it so)
 
     def __init__(
-        self, profile: str | ServerProfile = "v19", noise: bool = True, render_mode: str | None = None, **task_kwargs: Any
+        self,
+        profile: str | ServerProfile = "v19",
+        noise: bool = True,
+        render_mode: str | None = None,
+        perception: str = "full",
+        **task_kwargs: Any,
     ) -> None:
         self.profile, self.task = configure(profile, noise, render_mode, task_kwargs)
         self.render_mode = render_mode
-        self._lanes = DribbleLanes(1, self.profile, self.task, self.np_random)
+        self._lanes = DribbleLanes(1, self.profile, self.task, self.np_random, perception)
         self.action_space = skills.action_space(self.profile)
         self.observation_space = self._lanes.observation_space
         self._lane = np.zeros(1, dtype=np.int64)

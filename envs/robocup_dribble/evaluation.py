@@ -33,6 +33,7 @@ import numpy as np
 from robocup_dribble import physics
 from robocup_dribble.env import configure
 from robocup_dribble.lanes import DribbleLanes
+from robocup_dribble.perception import SIGHT_INTERVAL
 from robocup_dribble.params import EPS, ServerProfile
 from robocup_dribble.task import DribbleTask
 from robocup_dribble.vec_env import parse_actions
@@ -83,6 +84,7 @@ def evaluate_dribbling(
     seed: int = 0,
     n_lanes: int = 100,
     deterministic: bool = True,
+    perception: str = "full",
     **env_kwargs: Any,
 ) -> DribbleReport:
     """Play the episode slots ``0 .. n_episodes - 1`` of ``seed`` (module docstring) with ``policy``.
@@ -96,6 +98,9 @@ def evaluate_dribbling(
     :param n_lanes: episodes run side by side (at most ``n_episodes``); the results do not depend on it for a policy
         that acts on each observation alone.
     :param deterministic: passed to ``predict`` (greedy actions by default).
+    :param perception: what the policy and the skills read, as for the env: ``"full"`` or ``"match"``
+        (:mod:`robocup_dribble.perception`); with ``"match"`` the first see of slot ``j`` follows its first cycle
+        for even ``j`` and its second for odd ``j``.
     :param env_kwargs: ``noise`` and the :class:`robocup_dribble.task.DribbleTask` settings of the env
         (``episodes_per_type_set`` is accepted and has no effect: every slot draws its own type set).
     :raises ValueError: for ``n_episodes`` or ``n_lanes`` not an integer >= 1, ``seed`` not an integer in 0 .. 2**64 - 1, or an
@@ -104,7 +109,7 @@ def evaluate_dribbling(
     _check_integer("n_episodes", n_episodes, 1)
     server_profile, task_settings = configure(profile, env_kwargs.pop("noise", True), None, env_kwargs)
     episodes = _Slots(int(n_episodes), _checked_seed(seed), task_settings.max_actions)
-    return _evaluate(policy, server_profile, task_settings, episodes, n_lanes, deterministic)
+    return _evaluate(policy, server_profile, task_settings, episodes, n_lanes, deterministic, perception)
 
 
 def evaluate_episodes(
@@ -115,6 +120,7 @@ def evaluate_episodes(
     seed: int = 0,
     n_lanes: int = 100,
     deterministic: bool = True,
+    perception: str = "full",
     **env_kwargs: Any,
 ) -> DribbleReport:
     """Play given episodes (a player type and a start state each, row ``j`` for episode ``j``) with ``policy``.
@@ -133,7 +139,7 @@ def evaluate_episodes(
         raise ValueError("evaluate_episodes needs at least one episode")
     server_profile, task_settings = configure(profile, env_kwargs.pop("noise", True), None, env_kwargs)
     episodes = _Slots(len(types), _checked_seed(seed), task_settings.max_actions, (types, starts))
-    return _evaluate(policy, server_profile, task_settings, episodes, n_lanes, deterministic)
+    return _evaluate(policy, server_profile, task_settings, episodes, n_lanes, deterministic, perception)
 
 
 def _checked_seed(seed: Any) -> int:
@@ -145,13 +151,13 @@ def _checked_seed(seed: Any) -> int:
 
 def _evaluate(
     policy: Any, server_profile: ServerProfile, task_settings: DribbleTask, episodes: _Slots, n_lanes: int,
-    deterministic: bool,
+    deterministic: bool, perception: str,
 ) -> DribbleReport:  # fmt: skip
     """Play every slot of ``episodes``, ``n_lanes`` at a time (handed to lanes in order as they free up)."""
     _check_integer("n_lanes", n_lanes, 1)
     n_episodes = len(episodes.distances)
     n_lanes = min(int(n_lanes), n_episodes)
-    lanes = DribbleLanes(n_lanes, server_profile, task_settings, np.random.default_rng(0))  # its rng stays unused
+    lanes = DribbleLanes(n_lanes, server_profile, task_settings, np.random.default_rng(0), perception)  # rng unused
     all_lanes = np.arange(n_lanes)
     slot_of_lane = np.arange(n_lanes)
     noise = np.empty((n_lanes, task_settings.max_actions, physics.N_UNIFORMS))
@@ -283,6 +289,7 @@ class _Slots:
         blocks = self._draw((first * self.block // 4, 0, 0, 0), (len(lane_ids), self.block))
         noise[lane_ids] = blocks[:, : self.noise_size].reshape(len(lane_ids), self.max_actions, physics.N_UNIFORMS)
         slots = np.arange(first, first + len(lane_ids))
+        lanes.clock[lane_ids] = slots % SIGHT_INTERVAL  # the sights' phase is the slot's, not the lane's history
         if self.given is not None:
             self.player_types[slots], self.start_states[slots] = self.given[0][slots], self.given[1][slots]
             return lanes.place(lane_ids, self.given[0][slots], self.given[1][slots])

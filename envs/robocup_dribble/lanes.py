@@ -14,6 +14,12 @@ starts the next one (in lane order), taking, if its type set is used up, a new s
 (:func:`robocup_dribble.task.start_lane`). This is random stream version 2; version 1 (before the episode starts
 moved into the compiled loop) drew the type sets from a separately drawn pool.
 
+With ``perception="match"`` (:mod:`robocup_dribble.perception`) each lane also keeps the player's estimate of its
+state: the skills' commands and the observations are computed from the estimate, the physics and the task's rules
+run on the true state. A see follows every cycle that makes the lane's :attr:`DribbleLanes.clock` (cycles run since
+the lanes were made or reseeded, or as set) odd, as the server's clock does for its sights; an episode starts with
+the estimate equal to the start state (the trainer's placement). Perception draws nothing: the stream is the same.
+
 Two ways around that stream, for callers that need each episode's draws to be fixed by something other than the
 order of resets (common random numbers, :func:`robocup_dribble.evaluation.evaluate_dribbling`):
 :meth:`DribbleLanes.start_from` starts given lanes from caller-given uniforms (a row each), and
@@ -28,8 +34,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from robocup_dribble import physics, skills, task
-from robocup_dribble.params import ServerProfile
+from robocup_dribble import perception, physics, skills, task
+from robocup_dribble.params import ServerProfile, without_noise
+from robocup_dribble.perception import check_perception
 from robocup_dribble.player_types import PlayerType, TypeRecipe, draw_type_set, next_uniform, type_recipe
 from robocup_dribble.task import DribbleTask
 
@@ -87,12 +94,22 @@ class DribbleLanes:
     :param task_settings: the task's settings.
     :param rng: the generator of random stream version 2 (types, starts, noise, in the order the module states), for
         all but what :meth:`start_from` and ``step(..., uniforms=...)`` are given.
+    :param perception: ``"full"`` (the policy and the skills read the exact state) or ``"match"`` (they read the
+        player's estimate from its own perception, module docstring).
     """
 
-    def __init__(self, n_lanes: int, profile: ServerProfile, task_settings: DribbleTask, rng: np.random.Generator) -> None:
+    def __init__(
+        self,
+        n_lanes: int,
+        profile: ServerProfile,
+        task_settings: DribbleTask,
+        rng: np.random.Generator,
+        perception: str = "full",
+    ) -> None:
         if isinstance(n_lanes, bool) or not isinstance(n_lanes, (int, np.integer)) or n_lanes < 1:  # type: ignore[redundant-expr]
             raise ValueError(f"n_lanes must be an integer >= 1, got {n_lanes!r}")
         self.n_lanes = n = int(n_lanes)
+        self.perception = check_perception(perception)
         self.profile = profile
         self.task = task_settings
         self.rng = rng
@@ -138,11 +155,26 @@ class DribbleLanes:
         )  # the fixed leading arguments of _step_lanes
         self._uniforms = np.empty(0)  # values drawn from rng and not used yet
         self._position = np.zeros(1, dtype=np.int64)  # the next one to use
+        perceiving = self.perception == "match"
+        self.estimate = a.state.copy() if perceiving else a.state
+        """``(N, STATE_SIZE)``: what the policy and the skills read; the state itself unless ``perception="match"``."""
+        self.clock = np.zeros(n, dtype=np.int64)
+        """``(N,)`` cycles each lane has run (with ``perception="match"`` a see follows a cycle that makes it odd)."""
+        self._unseen = np.zeros(n, dtype=np.int64)  # cycles since each lane's ball was last seen
+        self._perception_arrays = (
+            perceiving,
+            self.estimate,
+            self.clock,
+            self._unseen,
+            np.full((1, physics.N_UNIFORMS), 0.5),
+            physics.profile_constants(without_noise(profile)),
+        )  # the trailing arguments of _step_lanes
 
     def reseed(self, rng: np.random.Generator) -> None:
         """Draw everything from ``rng`` from now on and start new type sets in every lane."""
         self.rng = rng
         self.arrays.episodes_in_set[:] = 0
+        self.clock[:] = 0
         self._uniforms = np.empty(0)
         self._position[0] = 0
 
@@ -195,7 +227,7 @@ class DribbleLanes:
         )
         physics_uniforms = self._take(n * physics.N_UNIFORMS).reshape(n, physics.N_UNIFORMS) if given is None else given
         # separate arrays, in LaneStep's order for the outputs: numba unpacks them faster than NamedTuples
-        ended = _step_lanes(*self._step_arrays, kinds, params, physics_uniforms, *out)
+        ended = _step_lanes(*self._step_arrays, kinds, params, physics_uniforms, *out, *self._perception_arrays)
         if autoreset and len(ended):
             self._start(ended, out.observations, by_row=False)
         return out
@@ -228,6 +260,13 @@ class DribbleLanes:
                 start = int(self._position[0])
                 self._uniforms = np.concatenate((self._uniforms[start:], self.rng.random(_DRAW_BLOCK)))
                 self._position[0] = 0
+        self._begin_estimates(lanes)
+
+    def _begin_estimates(self, lanes: np.ndarray) -> None:
+        """With ``perception="match"``: the player of each of ``lanes`` (just started) knows its start state."""
+        if self.estimate is not self.state:
+            self.estimate[lanes] = self.state[lanes]
+            self._unseen[lanes] = 0
 
     def start_from(self, lanes: np.ndarray, uniforms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Start a new episode in each of ``lanes`` from caller-given uniforms (not from ``rng``).
@@ -252,6 +291,7 @@ class DribbleLanes:
             raise ValueError("uniforms must lie in [0, 1]")
         obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
         short = _start_lanes_from_rows(self.arrays, self._settings, self.profile.player.player_types, index, rows, obs)
+        self._begin_estimates(index[~short])
         return obs, short
 
     def place(self, lanes: np.ndarray, player_types: np.ndarray, start_states: np.ndarray) -> np.ndarray:
@@ -271,6 +311,7 @@ class DribbleLanes:
         obs = np.empty((len(index), task.N_OBSERVATIONS), dtype=np.float32)
         for row, lane in enumerate(index.tolist()):
             task.observe(a.state, lane, a.types, lane, g.obs_low, g.obs_high, obs, row)
+        self._begin_estimates(index)
         return obs
 
     def _checked_uniforms(self, uniforms: np.ndarray) -> np.ndarray:
@@ -446,9 +487,17 @@ def _step_lanes(
     terminal_obs,
     episode_returns,
     episode_lengths,
+    perceiving,
+    estimate,
+    clock,
+    unseen,
+    calm,
+    k0,
 ) -> np.ndarray:
     """skills -> physics -> task for every lane (lane ``i`` uses ``uniforms[i]``); writes the :class:`LaneStep`
-    fields it names and returns the lanes whose episode ended, in order."""
+    fields it names and returns the lanes whose episode ended, in order. The skills and the observation read
+    ``estimate`` (the state itself unless ``perceiving``), which :func:`robocup_dribble.perception.perceive_lane`
+    then keeps (``calm``, ``k0``: its noise-free prediction)."""
     ended = np.empty(state.shape[0], dtype=np.int64)
     n_ended = 0
     max_actions = c[task.R_MAX_ACTIONS]
@@ -459,7 +508,7 @@ def _step_lanes(
         p1 = 0.0
         if skills.PARAM_WIDTHS[kind] > 1:
             p1 = min(max(params[i, first + 1], param_low[first + 1]), param_high[first + 1])
-        c_kind, power, direction = skills.command(state, i, types, i, kind, p0, p1, k)
+        c_kind, power, direction = skills.command(estimate, i, types, i, kind, p0, p1, k)
         previous_x = state[i, physics.P_X]
         collided, _ = physics.cycle(state, i, types, i, c_kind, power, direction, uniforms, i, k)
         reward, lost = task.evaluate(state, i, types, i, collided, previous_x, c, k)
@@ -469,7 +518,13 @@ def _step_lanes(
         returns[i] += reward
         ended_by_limit = steps[i] >= max_actions and not lost
         rewards[i], terminated[i], truncated[i], distances[i] = reward, lost, ended_by_limit, distance[i]
-        task.observe(state, i, types, i, obs_low, obs_high, obs, i)
+        clock[i] += 1
+        if perceiving:
+            sees = clock[i] % perception.SIGHT_INTERVAL == 1
+            unseen[i] = perception.perceive_lane(
+                state, estimate, i, types, i, c_kind, power, direction, sees, unseen[i], calm, k0
+            )
+        task.observe(estimate, i, types, i, obs_low, obs_high, obs, i)
         if lost or ended_by_limit:
             episode_returns[i], episode_lengths[i] = returns[i], steps[i]
             for j in range(obs.shape[1]):

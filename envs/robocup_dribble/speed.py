@@ -13,8 +13,9 @@ runs made seconds apart in the same process.
 
 Targets (one core): a single-env step <= 30 us; ``DribbleVecEnv(4096).step_arrays`` (the array path)
 >= 3,000,000 player-steps/s with holding actions and >= 1,500,000 with random actions, and SB3's tuple ``step`` at
-N = 64 within 3x of ``step_arrays`` at N = 64. The load average is printed: on a shared machine the
-absolute figures still drop with it (caches are shared), the ratios much less.
+N = 64 within 3x of ``step_arrays`` at N = 64. ``DribbleVecEnv(4096, perception="match")`` (the match player's
+perception, :mod:`robocup_dribble.perception`) is timed next to it, with the ratio. The load average is printed: on
+a shared machine the absolute figures still drop with it (caches are shared), the ratios much less.
 """
 
 from __future__ import annotations
@@ -59,6 +60,25 @@ def best_rate(run: Callable[[int], int], seconds: float) -> float:
         items = run(iterations * 10)
         rates.append(items / (time.process_time() - start))
     return max(rates)
+
+
+def array_rate(
+    profile: str, n: int, kinds: np.ndarray, params: np.ndarray, seconds: float, perception: str = "full"
+) -> tuple[DribbleVecEnv, float]:
+    """A reset ``DribbleVecEnv(n)`` and its ``step_arrays`` rate (player-steps/s) on the action stream."""
+    vec = DribbleVecEnv(n, profile=profile, perception=perception)
+    vec.seed(0)
+    vec.reset()
+    batches = [
+        (np.resize(np.roll(kinds, -j), n), np.resize(np.roll(params, -j, axis=0), (n, skills.N_PARAMS))) for j in range(8)
+    ]
+
+    def arrays(k: int) -> int:
+        for i in range(k):
+            vec.step_arrays(*batches[i % 8])
+        return k * n
+
+    return vec, best_rate(arrays, seconds)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -114,22 +134,15 @@ def measure(name: str, profile: str, kinds: np.ndarray, params: np.ndarray, seco
     print(f"SB3 DummyVecEnv([DribbleEnv]).step: {dummy_rate:>12,.0f} steps/s         ({1e6 / dummy_rate:6.1f} us/step)")
     array_rates = {}
     for n in (1, 64, 4096):
-        vec = DribbleVecEnv(n, profile=profile)
-        vec.seed(0)
-        vec.reset()
-        batches = [
-            (np.resize(np.roll(kinds, -j), n), np.resize(np.roll(params, -j, axis=0), (n, skills.N_PARAMS))) for j in range(8)
-        ]
-
-        def arrays(
-            k: int, vec: DribbleVecEnv = vec, batches: list[tuple[np.ndarray, np.ndarray]] = batches, n: int = n
-        ) -> int:
-            for i in range(k):
-                vec.step_arrays(*batches[i % 8])
-            return k * n
-
-        rate = array_rates[n] = best_rate(arrays, seconds)
+        vec, rate = array_rate(profile, n, kinds, params, seconds)
+        array_rates[n] = rate
         print(f"DribbleVecEnv({n:>4}).step_arrays:    {rate:>12,.0f} player-steps/s  ({rate / dummy_rate:6.1f}x DummyVecEnv)")
+        if n == 4096:
+            _, perceiving = array_rate(profile, n, kinds, params, seconds, "match")
+            print(
+                f"  with perception='match':           {perceiving:>12,.0f} player-steps/s  "
+                f"({perceiving / rate:.2f}x perception='full')"
+            )
         if n == 64:
             tuple_batches = [[tuples[(j + i) % ACTIONS] for i in range(n)] for j in range(8)]
 

@@ -52,7 +52,7 @@ class ArrayStep(NamedTuple):
 class DribbleVecEnv(VecEnv):
     """``n_envs`` dribbling lanes stepped by one compiled call: a Stable-Baselines3 ``VecEnv``.
 
-    Same physics, task and arguments as :class:`robocup_dribble.env.DribbleEnv` (one code path:
+    Same physics, task and arguments (``perception`` included) as :class:`robocup_dribble.env.DribbleEnv` (one code path:
     :class:`robocup_dribble.lanes.DribbleLanes`); with ``n_envs=1`` and the same seed it produces the same episodes.
     Finished lanes reset automatically, inside the compiled step. All lanes draw from one generator seeded by
     :meth:`seed` (the first seed).
@@ -75,10 +75,11 @@ class DribbleVecEnv(VecEnv):
         profile: str | ServerProfile = "v19",
         noise: bool = True,
         render_mode: str | None = None,
+        perception: str = "full",
         **task_kwargs: Any,
     ) -> None:
         self.profile, self.task = configure(profile, noise, render_mode, task_kwargs)
-        self._lanes = DribbleLanes(n_envs, self.profile, self.task, seeding.np_random()[0])
+        self._lanes = DribbleLanes(n_envs, self.profile, self.task, seeding.np_random()[0], perception)
         self.render_mode = render_mode
         super().__init__(n_envs, self._lanes.observation_space, skills.action_space(self.profile))
         self.metadata = dict(DribbleEnv.metadata)  # VecEnv.__init__ replaced it with one lacking render_fps

@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from robocup_dribble import ENV_PROFILES
+from robocup_dribble.perception import PERCEPTIONS
 from sb3_aac.cli.arguments import CliError
 from sb3_aac.common.envs import TOY_ENV_ID, register_toy_env
 
@@ -50,13 +51,28 @@ def max_episode_length(env_id: str) -> int:
     raise CliError(f"{env_id} declares no max_episode_steps, so an --episodes budget has no step bound: use --timesteps")
 
 
-def make_train_env(env_id: str, n_envs: int, seed: int | None) -> Any:
+def add_perception_argument(parser: Any) -> None:
+    """``--perception``: what the policy reads in the dribbling envs (their ``perception`` option)."""
+    parser.add_argument(
+        "--perception",
+        choices=PERCEPTIONS,
+        default="full",
+        help="dribbling envs: the policy reads the exact state (full) or a match player's own perception, rcssserver's "
+        "quantised see/sense_body and the estimate kept from them (match) (default: %(default)s)",
+    )
+
+
+def make_train_env(env_id: str, n_envs: int, seed: int | None, perception: str = "full") -> Any:
+    """``n_envs`` lanes of ``env_id`` seeded with ``seed``; ``perception`` (``"full"`` or ``"match"``) is the dribbling
+    envs' option (robocup_dribble.perception), refused for any other env."""
     if env_id in DRIBBLE_IDS:
         from robocup_dribble import DribbleVecEnv
 
-        env = DribbleVecEnv(n_envs, profile=DRIBBLE_IDS[env_id])
+        env = DribbleVecEnv(n_envs, profile=DRIBBLE_IDS[env_id], perception=perception)
         env.seed(seed)
         return env
+    if perception != "full":
+        raise CliError(f"--perception {perception} is an option of the dribbling envs {sorted(DRIBBLE_IDS)}, not of {env_id}")
     from stable_baselines3.common.env_util import make_vec_env
 
     try:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from sb3_aac.cli.arguments import episode_count, output_file, written
-from sb3_aac.cli.envs import PROFILE_ENV_IDS
+from sb3_aac.cli.envs import PROFILE_ENV_IDS, add_perception_argument
 from sb3_aac.cli.models import load_policy
 from sb3_aac.cli.reports import print_dribble_report, reliability_figure
 
@@ -24,6 +24,7 @@ def add_evaluate_commands(add: Any, played: argparse.ArgumentParser) -> None:
         (played,),
     )
     evaluate.add_argument("--episodes", type=episode_count, default=1000, help="episodes (default: %(default)s)")
+    add_perception_argument(evaluate)
     evaluate.set_defaults(func=cmd_evaluate)
 
     reliability = add(
@@ -44,10 +45,11 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
 
     policy, profile = load_policy(args.model, args.profile, args.trust)
     start = time.perf_counter()
-    report = evaluate_dribbling(policy, args.episodes, profile=profile, seed=args.seed)
+    report = evaluate_dribbling(policy, args.episodes, profile=profile, seed=args.seed, perception=args.perception)
     print_dribble_report(
         report,
-        f"{args.model} on {PROFILE_ENV_IDS[profile]}: {len(report.distances)} greedy episodes of fresh heterogeneous players "
+        f"{args.model} on {PROFILE_ENV_IDS[profile]} (perception {args.perception}): {len(report.distances)} greedy "
+        "episodes of fresh heterogeneous players "
         f"({time.perf_counter() - start:.1f} s)",
     )
 

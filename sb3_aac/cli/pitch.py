@@ -40,8 +40,8 @@ def add_pitch_command(add: Any, played: argparse.ArgumentParser) -> None:
     pitch.add_argument(
         "--perceive",
         action="store_true",
-        help="on the server, the policy sees what a player in a match sees (its own see/sense_body, quantised and noisy) "
-        "instead of the exact state",
+        help="the policy sees what a player in a match sees instead of the exact state: on the server its own "
+        "see/sense_body, in the env the env's model of that perception (perception='match')",
     )
     pitch.add_argument("--out", help="write the per-episode results to this .csv file")
     pitch.set_defaults(func=cmd_pitch)
@@ -74,9 +74,12 @@ def cmd_pitch(args: argparse.Namespace) -> None:
     except ValueError as error:
         raise CliError(f"--world-seed: {error}") from None
     episodes = server_episodes(args.episodes, world_seed=args.world_seed, seed=args.seed, profile=profile)
-    view = "its own see/sense_body" if args.perceive else "the exact state (fullstate)"
+    perception = "match" if args.perceive else "full"
     print(f"{args.model}: {args.episodes} episodes of world {args.world_seed} (player::random_seed), seed {args.seed}")
-    print(f"  on the server the policy acts on {view}; in the env on the exact state")
+    if args.perceive:
+        print("  the policy acts on its own perception: on the server see/sense_body, in the env perception='match'")
+    else:
+        print("  the policy acts on the exact state: on the server fullstate, in the env the state")
     with _progress(args.episodes) as advance:
         try:
             real = play_on_server(
@@ -84,7 +87,9 @@ def cmd_pitch(args: argparse.Namespace) -> None:
             )
         except (ServerError, ValueError) as error:
             raise CliError(str(error)) from None
-    sim = evaluate_episodes(policy, episodes.player_types, episodes.start_states, profile=profile, seed=args.seed)
+    sim = evaluate_episodes(
+        policy, episodes.player_types, episodes.start_states, profile=profile, seed=args.seed, perception=perception
+    )
     for name, report in (("real server", real), ("env        ", sim)):
         low, high = mean_interval(report.distances)
         print(f"  {name}  {report.mean_distance:6.2f} m [{low:.2f}, {high:.2f}]  ball lost {100 * report.loss_rate:5.1f} %")

@@ -19,7 +19,14 @@ from sb3_aac.cli.arguments import (
     seed_int,
     step_count,
 )
-from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env, max_episode_length
+from sb3_aac.cli.envs import (
+    DRIBBLE_IDS,
+    add_perception_argument,
+    check_env_id,
+    import_gym_packages,
+    make_train_env,
+    max_episode_length,
+)
 from sb3_aac.cli.models import ALGOS, POLICIES, algo_key, algorithm, hyperparameters
 from sb3_aac.cli.reports import print_dribble_report
 from sb3_aac.common.output_files import RunFolder
@@ -57,6 +64,7 @@ def add_train_command(add: Any) -> None:
     )
     train.add_argument("--n-envs", type=lane_count, default=16, help="envs stepped side by side (default: %(default)s)")
     train.add_argument("--seed", type=seed_int, default=0, help="random seed (default: %(default)s)")
+    add_perception_argument(train)
     train.add_argument("--tensorboard", metavar="DIR", help="write TensorBoard logs here (view: tensorboard --logdir DIR)")
     train.add_argument("--progress-bar", action="store_true", help="show a progress bar (tqdm, rich)")
     train.add_argument(
@@ -138,7 +146,7 @@ def training_budget(args: argparse.Namespace) -> tuple[int, str]:
 
 
 def build_model(args: argparse.Namespace, kwargs: dict[str, Any]) -> Any:
-    env = make_train_env(args.env, args.n_envs, args.seed)
+    env = make_train_env(args.env, args.n_envs, args.seed, args.perception)
     try:
         cls = algorithm(args.algo)
         return cls(args.policy, env, seed=args.seed, tensorboard_log=args.tensorboard, verbose=args.verbose, **kwargs)
@@ -182,6 +190,7 @@ def run_settings(args: argparse.Namespace, model: Any, kwargs: dict[str, Any]) -
         "policy": args.policy,
         "seed": args.seed,
         "n_envs": args.n_envs,
+        "perception": args.perception,
         "timesteps": model.num_timesteps,
         "episodes": model.episode_num,
         "hyperparameters": {k: repr(v) for k, v in kwargs.items()},
@@ -214,7 +223,9 @@ def evaluate_greedy(model: Any, args: argparse.Namespace) -> None:
     if args.env in DRIBBLE_IDS:
         from robocup_dribble.evaluation import evaluate_dribbling
 
-        report = evaluate_dribbling(model, args.eval_episodes, profile=DRIBBLE_IDS[args.env], seed=seed)
+        report = evaluate_dribbling(
+            model, args.eval_episodes, profile=DRIBBLE_IDS[args.env], seed=seed, perception=args.perception
+        )
         print_dribble_report(report, f"greedy evaluation on {len(report.distances)} episodes of fresh players:")
     else:
         from stable_baselines3.common.evaluation import evaluate_policy

@@ -1,28 +1,21 @@
 """What a player in a match knows of the dribble: its own ``(see ...)`` and ``(sense_body ...)``, not fullstate.
 
-The server quantises what a player sees (rcssserver ``src/visualsenderplayer.cpp``): the ball's distance to 0.1 m
-after a logarithmic quantisation, its direction to 1 degree, and, only while the ball is inside the view cone, its
-distance change and direction change, from which the relative velocity follows; a ball outside the cone but within
-``visible_distance`` (3 m) is reported as ``(B) dist dir`` only. In synchronous mode the default view (normal width,
-high quality) is a 120-degree cone sent every second cycle (``src/player.cpp``, ``Player::change_view``).
-``sense_body`` gives the player's speed to 0.01 m/cycle and its direction to 1 degree.
-
-:class:`PerceivedWorld` is the world model a RoboCup agent keeps from that: the noise-free env physics predicts the
-state from the last estimate and the command sent, and what the player perceives replaces the prediction (its own
-velocity every cycle; the ball's relative position when the ball was seen; its relative velocity when the ball was in
-the view cone). The body angle is taken from the server's state (an agent gets it from the seen field lines to about
-a degree; the four skills never turn the player). The observation is then built from the estimate as the env builds
-it, and the episode is still judged on the server's true state.
+The readers below pick the ball out of a see (:func:`read_seen_ball`) and the player's speed out of a sense_body
+(:func:`read_speed`); :class:`PerceivedWorld` keeps the player's estimate from them with the env's own world model,
+:func:`robocup_dribble.perception.update_estimate` (what the server quantises and when it sends what, and how the
+estimate follows: :mod:`robocup_dribble.perception`). The env's ``perception="match"`` computes the same perceptions
+from its true state (:func:`robocup_dribble.perception.seen_ball`, :func:`~robocup_dribble.perception.sensed_speed`),
+so a policy trained there meets on the server the estimate it was trained on. The client builds the observation from
+the estimate as the env builds it, and the episode is still judged on the server's true state.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from robocup_dribble import physics
+from robocup_dribble import perception, physics
 from robocup_dribble.params import ServerProfile, without_noise
 from robocup_dribble.rcss.protocol import ProtocolError, parse
 
@@ -78,19 +71,15 @@ def read_speed(message: str) -> tuple[float, float, float]:
     return found["speed"][0], found["speed"][1], found["head_angle"][0]
 
 
-VELOCITY_GAIN = 1.0
-"""Share of a seen ball's position error (against the prediction) that corrects its estimated velocity."""
-
-
 class PerceivedWorld:
-    """A player's estimate of player and ball, kept from its perceptions (module docstring).
+    """A player's estimate of player and ball, kept from its perceptions (:func:`robocup_dribble.perception.update_estimate`).
 
     :param profile: the server profile; its physics, without noise, predicts each cycle.
     """
 
     def __init__(self, profile: ServerProfile) -> None:
         self._constants = physics.profile_constants(without_noise(profile))
-        self._noise_free = np.full((1, physics.N_UNIFORMS), 0.5)
+        self._calm = np.full((1, physics.N_UNIFORMS), 0.5)
         self.state = physics.new_state(1)
         self._unseen = 0  # cycles since the ball was last seen
 
@@ -110,27 +99,21 @@ class PerceivedWorld:
         """The estimate ``(STATE_SIZE,)`` after a cycle with ``command`` (``COMMAND_SIZE``), given the body angle (rad),
         the sense_body speed and the seen ball of the cycle (None when there was no see or no ball in it)."""
         types = np.asarray(player_type, dtype=np.float64).reshape(1, physics.TYPE_SIZE)
-        physics.step(self.state, types, command.reshape(1, physics.COMMAND_SIZE), self._noise_free, self._constants)
-        s = self.state[0]
-        s[physics.P_BODY] = body
         amount, direction, head = speed
-        heading = body + math.radians(head + direction)
-        s[physics.P_VX], s[physics.P_VY] = amount * math.cos(heading), amount * math.sin(heading)
-        self._unseen += 1
+        sighting, distance, ball_direction, distance_change, direction_change = perception.NOT_SEEN, 0.0, 0.0, 0.0, 0.0
         if ball is not None:
-            angle = body + math.radians(head + ball.direction)
-            ex, ey = math.cos(angle), math.sin(angle)
-            seen_x, seen_y = s[physics.P_X] + ball.distance * ex, s[physics.P_Y] + ball.distance * ey
+            sighting, distance, ball_direction = perception.SEEN_CLOSE, ball.distance, head + ball.direction
             if ball.distance_change is not None and ball.direction_change is not None:
-                across = math.radians(ball.direction_change) * ball.distance
-                s[physics.B_VX] = s[physics.P_VX] + ball.distance_change * ex - across * ey
-                s[physics.B_VY] = s[physics.P_VY] + ball.distance_change * ey + across * ex
-            else:  # the position missed by the prediction is put down to the ball's velocity since the last see
-                decay = self._constants[physics.K_BALL_DECAY]
-                share = decay / sum(decay**i for i in range(self._unseen))
-                s[physics.B_VX] += VELOCITY_GAIN * share * (seen_x - s[physics.B_X])
-                s[physics.B_VY] += VELOCITY_GAIN * share * (seen_y - s[physics.B_Y])
-            s[physics.B_X], s[physics.B_Y] = seen_x, seen_y
-            self._unseen = 0
-        estimate: np.ndarray = s.copy()
+                sighting, distance_change, direction_change = (
+                    perception.SEEN_IN_CONE,
+                    ball.distance_change,
+                    ball.direction_change,
+                )
+        self._unseen = perception.update_estimate(
+            self.state, 0, types, 0, int(command[physics.C_KIND]), float(command[physics.C_POWER]),
+            float(command[physics.C_DIRECTION]), float(body), float(amount), head + direction, sighting, float(distance),
+            float(ball_direction), float(distance_change), float(direction_change), self._unseen, self._calm,
+            self._constants,
+        )  # fmt: skip
+        estimate: np.ndarray = self.state[0].copy()
         return estimate

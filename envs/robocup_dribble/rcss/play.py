@@ -8,10 +8,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from robocup_dribble import physics
 from robocup_dribble.env import configure
 from robocup_dribble.evaluation import DribbleReport
 from robocup_dribble.params import ServerProfile
 from robocup_dribble.rcss.client import ServerEpisodes, ServerSession, checked_profile, server_options
+from robocup_dribble.rcss.perception import PerceivedWorld
 from robocup_dribble.rcss.server import DEFAULT_TIMEOUT, Endpoint, Log, ServerError, ServerPorts, ServerProcess, connect
 
 SERVER_VARIABLE = "RCSSSERVER"
@@ -88,6 +92,10 @@ def _play(
         session = ServerSession(player, trainer, profile, episodes.world_seed, **env_kwargs)
         # a first call that compiles must not keep the waiting server past its 1.25 s
         policy.predict(session.observe(episodes.start_states[0], episodes.player_types[0]), deterministic=deterministic)
+        if perceive:  # so must the world model's first update
+            world = PerceivedWorld(profile)
+            world.start(episodes.start_states[0])
+            world.update(episodes.player_types[0], np.zeros(physics.COMMAND_SIZE), 0.0, (0.0, 0.0, 0.0), None)
         session.open()
         return session.play(policy, episodes, deterministic, on_episode, perceive)
     finally:
