@@ -83,6 +83,8 @@ _PDQN_TAGS = ("train/actor_loss", "train/learning_rate", "train/actor_learning_r
 _HPPO_TAGS = (
     *("train/policy_loss_discrete", "train/policy_loss_params", "train/clip_fraction_discrete"),
     *("train/clip_fraction_params", "train/entropy_discrete", "train/entropy_params", "train/value_loss"),
+    *("train/approx_kl", "train/explained_variance", "train/std", "train/clip_range", "train/clip_range_params"),
+    *("train/learning_rate", "rollout/type_freq_2", "rollout/param_mean_1_1"),
 )
 # Every algorithm, and SarsaAAC with each policy: a new algorithm (or policy) joins the feature tests by one line.
 ALGOS = [
