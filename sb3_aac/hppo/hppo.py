@@ -206,7 +206,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
             self.clip_range if self.clip_range_params is None else self.clip_range_params
         )
         self.clip_range_vf_schedule = None if self.clip_range_vf is None else FloatSchedule(self.clip_range_vf)
-        self._action_stats = ActionStats(self.policy.spec)
+        self._action_stats = ActionStats(self.policy.spec, value_name="value")
         self._reset_keyword_buffers()
 
     def _excluded_save_params(self) -> list[str]:
