@@ -6,11 +6,13 @@ turns those files into a report with figures (``python -m benchmarks.report DIR`
 * :mod:`benchmarks.presets`: the grid (envs, algorithms, approximator configs, seeds, budgets, hyperparameters);
 * :mod:`benchmarks.domains`: the grid's envs beyond dribbling and how each one is scored;
 * :mod:`benchmarks.adapters`: baseline envs and adapters that let a Box/Discrete SB3 model act in the Tuple env;
-* :mod:`benchmarks.zoo_hyperparams`: the P-DQN / MP-DQN settings from ``hyperparams/*.yml``;
+* :mod:`benchmarks.zoo_hyperparams`: the P-DQN / MP-DQN / HybridPPO settings from ``hyperparams/*.yml`` and the
+  training env of an entry;
 * :mod:`benchmarks.cells`: the result files: where they live, atomic writing, the per-cell lock, the one loader;
 * :mod:`benchmarks.evaluation`: the evaluation summary, the decision cost and the learning-curve callback;
 * :mod:`benchmarks.platform_info`: versions, machine and load recorded in every cell;
 * :mod:`benchmarks.execution`: one cell, and the resumable parallel grid of them;
+* :mod:`benchmarks.cost`: what a preset costs, per stage, in core-hours (``--estimate``; the pool's ordering);
 * :mod:`benchmarks.engines`: running the cells on Ray (``--engine ray``);
 * :mod:`benchmarks.wall_clock`: the equal wall-clock budget (training stopped after a cell's seconds);
 * :mod:`benchmarks.tuning`: the tuning stage (``--tune``): one equal-size Optuna study per headline learner and env;
@@ -35,7 +37,7 @@ Outside the grid:
 * :mod:`benchmarks.pdqn_platform`: P-DQN / MP-DQN greedy score on Platform-v0 or Goal-v0 against env steps
   (``python -m benchmarks.pdqn_platform``);
 * :mod:`benchmarks.reference_init`: the reference MP-DQN code's initial parameter policy on Goal-v0
-  (``pdqn_platform --reference-init``);
+  (``pdqn_platform --reference-init``, and the grid's MP-DQN on Goal-v0);
 * :mod:`benchmarks.domain_baselines`: a random and a scripted policy's figures on every ``hybrid_domains`` env
   (``python -m benchmarks.domain_baselines``);
 * :mod:`benchmarks.hppo`: HybridPPO against PPO through the flatten wrapper, per domain over seeds

@@ -108,6 +108,12 @@ def is_dribbling(env_id: str) -> bool:
     return env_id in ENV_PROFILES
 
 
+def info_keywords(env_id: str) -> tuple[str, ...]:
+    """The ``info`` keys every learner logs as ``rollout/ep_<key>_mean`` on ``env_id``: the dribbling env's metres and
+    lost balls; none on the episodic domains (their success flag is SB3's ``rollout/success_rate``)."""
+    return ("distance", "ball_lost") if is_dribbling(env_id) else ()
+
+
 def episodic_domain(env_id: str) -> EpisodicDomain:
     """The :class:`EpisodicDomain` of ``env_id``; a ValueError names the known ids otherwise."""
     if env_id not in EPISODIC:

@@ -13,9 +13,11 @@ last. So no filesystem is shared between the nodes, and a cell file still exists
 is in place. A worker node that is lost takes its running tasks with it; Ray runs them again on another node (up to
 ``max_retries`` times), and a cell whose retries are exhausted is recorded as failed (``errors/<cell_id>.txt``) and
 run again by the next invocation. The tasks belong to the driver: when the driver dies, Ray cancels them, and a
-rerun skips the cells whose files were written.
+rerun skips the cells whose files were written. A Ray instance the driver started ends with it, ``kill -9`` included
+(:mod:`benchmarks.process_reaper` ends what Ray's own fate sharing leaves behind).
 
-Ray is an optional dependency (``pip install sb3-aac[distributed]``); it is imported only when a RayEngine runs.
+Ray is an optional dependency (``pip install sb3-aac[distributed]``, with psutil for the watchdog); it is imported
+only when a RayEngine runs.
 """
 
 from __future__ import annotations
@@ -26,11 +28,12 @@ import re
 import shutil
 import socket
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from benchmarks.presets import Cell
+from benchmarks.process_reaper import ProcessReaper
 
 if TYPE_CHECKING:
     from benchmarks.execution import Record
@@ -138,23 +141,38 @@ class RayEngine:
                 f"({error.strerror or error}); start one there (`ray start --head --port {port}`) or drop --address"
             ) from None
 
-    def _connect(self) -> bool:
-        """Initialise Ray unless it already is; True if this call did (so :meth:`run` shuts it down)."""
+    @contextlib.contextmanager
+    def connected(self) -> Iterator[None]:
+        """
+        Ray initialised for the block: the connection this process has (left open), or one opened here and shut
+        down at the end. A Ray instance started here (no ``address``) ends with this process however it ends: Ray
+        fate-shares its GCS server and raylet with the driver, and a :class:`~benchmarks.process_reaper.ProcessReaper`
+        ends the rest (the raylet's agents) if the driver is killed.
+        """
         import ray
 
         if ray.is_initialized():
-            return False
-        if self.address is None:
-            ray.init(num_cpus=self.num_cpus, include_dashboard=False, log_to_driver=False)
-        else:
-            ray.init(address=self.address, log_to_driver=False)
-        return True
+            yield
+            return
+        with contextlib.ExitStack() as stack:
+            if self.address is None:
+                reaper = stack.enter_context(ProcessReaper())
+                context = ray.init(num_cpus=self.num_cpus, include_dashboard=False, log_to_driver=False)
+                stack.callback(ray.shutdown)
+                reaper.claim(context.address_info["session_dir"])
+            else:
+                ray.init(address=self.address, log_to_driver=False)
+                stack.callback(ray.shutdown)
+            yield
 
     def run(self, cells: Sequence[Cell], out: Path, record: Record) -> None:
+        with self.connected():
+            self._run(cells, out, record)
+
+    def _run(self, cells: Sequence[Cell], out: Path, record: Record) -> None:
         import ray
         from ray.exceptions import RayError
 
-        started_here = self._connect()
         environ = {k: v for k, v in os.environ.items() if k.startswith(FORWARDED_ENV_PREFIX)}
         task = ray.remote(run_cell_in_scratch).options(
             num_cpus=1,
@@ -182,8 +200,6 @@ class RayEngine:
             for ref in pending:
                 with contextlib.suppress(Exception):
                     ray.cancel(ref, force=True)
-            if started_here:
-                ray.shutdown()
 
 
 def _python_path() -> dict[str, str]:

@@ -27,6 +27,7 @@ from stable_baselines3.common.logger import configure  # noqa: E402
 
 import robocup_dribble  # noqa: E402, F401  (registers the env ids)
 from benchmarks import cells  # noqa: E402
+from benchmarks.cost import cell_seconds  # noqa: E402
 from benchmarks.cells import atomic_write_json, atomic_write_text, cell_lock, remove_stale_temporaries, save_model_atomic  # noqa: E402
 from benchmarks import domains  # noqa: E402
 from benchmarks.evaluation import EvalCallback, predict_microseconds  # noqa: E402
@@ -36,18 +37,20 @@ from benchmarks.presets import (  # noqa: E402
     EVAL_SEED,
     FINAL_SEED,
     ON_POLICY,
+    ON_POLICY_PEERS,
     PEERS,
     SARSA_CONFIGS,
     SARSA_N_ENVS,
-    STEPS_PER_SECOND,
     Cell,
     is_tuned,
 )
 from benchmarks.provenance import cell_provenance  # noqa: E402
 from benchmarks.tuned import TUNED_PARAMS, TUNING_RECORD, tuned_cell  # noqa: E402
 from benchmarks.wall_clock import TrainingTimeLimit  # noqa: E402
-from benchmarks.zoo_hyperparams import settings  # noqa: E402
+from benchmarks.reference_init import with_reference_start  # noqa: E402
+from benchmarks.zoo_hyperparams import has_settings, settings, zoo_env  # noqa: E402
 from robocup_dribble.evaluation import evaluate_dribbling  # noqa: E402
+from sb3_aac.common.episode_stats import EpisodeKeywordsCallback  # noqa: E402
 
 PARENT_POLL_SECONDS = 0.2  # how often a worker checks that the driver still lives
 
@@ -65,10 +68,26 @@ class CellEngine(Protocol):
     def run(self, cells: Sequence[Cell], out: Path, record: Record) -> None: ...
 
 
-def peer_settings(cell: Cell) -> dict[str, Any]:
-    """P-DQN / MP-DQN constructor arguments: ``hyperparams/<algo>.yml``'s entry, then :data:`PEERS`, then overrides."""
+def peer_settings_source(cell: Cell) -> str:
+    """Where a peer's settings come from: ``hyperparams/<yml>.yml``'s entry for the env, the entry of the env's
+    fallback (:data:`PEERS`), or the algorithm's defaults."""
     spec = PEERS[cell.algo]
-    return {**settings(cell.algo.lower(), cell.env_id), "n_envs": spec["n_envs"], **spec["kwargs"], **cell.overrides}
+    path = f"hyperparams/{spec['yml']}.yml"
+    start = ", the reference code's initial parameter policy" if cell.env_id in spec.get("reference_start", ()) else ""
+    if has_settings(spec["yml"], cell.env_id):
+        return f"{path} ({cell.env_id}{start})"
+    if spec["fallback"] is not None:
+        return f"{path} ({spec['fallback']}; no entry for {cell.env_id})"
+    return f"{cell.algo} defaults (no entry for {cell.env_id} in {path})"
+
+
+def peer_settings(cell: Cell) -> dict[str, Any]:
+    """P-DQN / MP-DQN / HybridPPO constructor arguments: ``hyperparams/<yml>.yml``'s entry (:func:`peer_settings_source`),
+    then :data:`PEERS`, then overrides."""
+    spec = PEERS[cell.algo]
+    entry = cell.env_id if has_settings(spec["yml"], cell.env_id) else spec["fallback"]
+    base = settings(spec["yml"], entry) if entry is not None else {}
+    return {**base, "n_envs": spec["n_envs"], **spec["kwargs"], **cell.overrides}
 
 
 def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
@@ -81,29 +100,37 @@ def build_model(cell: Cell) -> tuple[Any, Any, int | None]:
     if cell.algo == "SarsaAAC":
         from sb3_aac import SarsaAAC
 
-        _, policy, policy_kwargs = SARSA_CONFIGS[cell.config]
-        overrides = dict(cell.overrides)
+        _, policy, policy_kwargs, config_kwargs = SARSA_CONFIGS[cell.config]
+        overrides = {**config_kwargs, **cell.overrides}
         env = domains.train_env(cell.env_id, overrides.pop("n_envs", SARSA_N_ENVS), cell.seed)
-        if not domains.is_dribbling(cell.env_id):
-            overrides.setdefault("info_keywords", ())
+        overrides.setdefault("info_keywords", domains.info_keywords(cell.env_id))
         policy_kwargs = {**policy_kwargs, **overrides.pop("policy_kwargs", {})}
         model = SarsaAAC(policy, env, seed=cell.seed, policy_kwargs=policy_kwargs, **overrides)
         return model, model, 100  # dump the rollout/train keys every 100 episodes
     if cell.algo in PEERS:
-        from sb3_aac import MPDQN, PDQN
+        import sb3_aac
 
-        kwargs = peer_settings(cell)
-        env = domains.train_env(cell.env_id, kwargs.pop("n_envs"), cell.seed)
-        if not domains.is_dribbling(cell.env_id):
-            kwargs.setdefault("info_keywords", ())
-        model = {"PDQN": PDQN, "MPDQN": MPDQN}[cell.algo]("MlpPolicy", env, seed=cell.seed, device="cpu", **kwargs)
-        return model, model, 100
+        spec, kwargs = PEERS[cell.algo], peer_settings(cell)
+        n_envs = kwargs.pop("n_envs")
+        if domains.is_dribbling(cell.env_id) or not has_settings(spec["yml"], cell.env_id):
+            env = domains.train_env(cell.env_id, n_envs, cell.seed)
+        else:  # the env of its own entry: the entry's env_wrapper chain (Goal: the reference's reward scale too)
+            env = zoo_env(spec["yml"], cell.env_id, n_envs, cell.seed)
+        kwargs.setdefault("info_keywords", domains.info_keywords(cell.env_id))
+        policy: Any = "MlpPolicy"
+        if cell.env_id in spec.get("reference_start", ()):
+            policy, kwargs = with_reference_start(kwargs)
+        model = getattr(sb3_aac, cell.algo)(policy, env, seed=cell.seed, device="cpu", **kwargs)
+        return model, model, _log_interval(model, cell.algo)
     from benchmarks.adapters import adapter_for, build_baseline
 
     model = build_baseline(cell.env_id, cell.algo, cell.seed, cell.overrides)
-    # On-policy: log_interval counts rollouts (about every 2048 transitions); off-policy: episodes.
-    log_interval = max(1, 2048 // (model.n_steps * model.n_envs)) if cell.algo in ON_POLICY else 100
-    return model, adapter_for(model, cell.algo, cell.env_id), log_interval
+    return model, adapter_for(model, cell.algo, cell.env_id), _log_interval(model, cell.algo)
+
+
+def _log_interval(model: Any, algo: str) -> int:
+    """``learn``'s ``log_interval``: on-policy it counts rollouts (about every 2048 transitions); off-policy episodes."""
+    return max(1, 2048 // (model.n_steps * model.n_envs)) if algo in (*ON_POLICY, *ON_POLICY_PEERS) else 100
 
 
 def algo_config(cell: Cell) -> dict[str, Any]:
@@ -112,18 +139,19 @@ def algo_config(cell: Cell) -> dict[str, Any]:
         tuned = {key: cell.overrides.get(key) for key in (TUNED_PARAMS, TUNING_RECORD)}
         return {**algo_config(tuned_cell(cell, kwargs_as_text=True)), **tuned, "other": "tuned (benchmarks.tuning)"}
     if cell.algo == "SarsaAAC":
-        _, policy, policy_kwargs = SARSA_CONFIGS[cell.config]
+        _, policy, policy_kwargs, config_kwargs = SARSA_CONFIGS[cell.config]
         return {
             "policy": policy,
             "policy_kwargs": policy_kwargs,
             "n_envs": SARSA_N_ENVS,
             "other": "SarsaAAC defaults",
+            **config_kwargs,
             **cell.overrides,
         }
     if cell.algo == "Reference":
         return {}
     if cell.algo in PEERS:
-        return {"policy": "MlpPolicy", "kwargs": peer_settings(cell), "other": f"hyperparams/{cell.algo.lower()}.yml"}
+        return {"policy": "MlpPolicy", "kwargs": peer_settings(cell), "other": peer_settings_source(cell)}
     spec = BASELINES[cell.algo]
     return {"policy": "MlpPolicy", **spec, "kwargs": {**spec["kwargs"], **cell.overrides}, "other": "SB3 defaults"}
 
@@ -198,6 +226,8 @@ def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
         callback = EvalCallback(policy, cell.env_id, cell.eval_every, cell.eval_episodes)
         limit = TrainingTimeLimit(cell.seconds, callback) if cell.seconds else None
         callbacks: list[BaseCallback] = [callback, *([limit] if limit else [])]
+        if cell.algo in BASELINES:  # SB3's algorithms log the env's info keys through a callback, ours themselves
+            callbacks.append(EpisodeKeywordsCallback(domains.info_keywords(cell.env_id)))
         model.learn(cell.budget, callback=CallbackList(callbacks), log_interval=log_interval)
         if callback.curve[-1]["env_steps"] < model.num_timesteps:
             callback.evaluate()  # the curve ends where training ended
@@ -307,13 +337,6 @@ def run_in_pool(function: Callable[..., tuple[Any, ...]], tasks: Sequence[tuple[
             raise
 
 
-def estimated_cost(cell: Cell) -> float:
-    """Rough seconds of a cell (to start the longest first, so two workers finish together)."""
-    if cell.algo == "Reference":
-        return 30.0
-    return float(cell.seconds) if cell.seconds else cell.budget / STEPS_PER_SECOND.get(cell.algo, 1000)
-
-
 def _summary_line(result: dict[str, Any]) -> str:
     if "references" in result:
         ref = result["references"]
@@ -346,7 +369,7 @@ def run_grid(
     for cell in grid:
         (status["skipped"] if cells.is_finished(out, cell) else todo).append(cell)
     status["skipped"] = [c.cell_id for c in status["skipped"]]
-    todo.sort(key=estimated_cost, reverse=True)
+    todo.sort(key=cell_seconds, reverse=True)  # the longest first, so the workers finish together
     os.environ.setdefault("SB3_AAC_BENCH_COMMAND", "(called from Python)")
     bar = tqdm(total=len(todo), desc="cells", unit="cell", disable=not progress, dynamic_ncols=True)
     if status["skipped"] and progress:

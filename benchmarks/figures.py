@@ -14,6 +14,8 @@ from benchmarks.presets import FAMILIES
 
 COLORS = {
     "tile": "#d62728",
+    "deep": "#ff7f0e",
+    "hybridppo": "#74c476",
     "pdqn": "#2ca02c",
     "mpdqn": "#006d2c",
     "mlp2": "#9ecae1",
@@ -41,7 +43,7 @@ FAMILY_TITLES = {
 
 RELIABILITY_STYLE = {
     "sarsa_aac": ("#d94801", "best SarsaAAC"),
-    "peer": ("#006d2c", "best P-DQN/MP-DQN"),
+    "peer": ("#006d2c", "best parameterized peer"),
     "baseline": ("#6a51a3", "best baseline"),
     "handcoded": ("black", "hand-coded"),
 }
@@ -91,10 +93,18 @@ def _plot_group(ax, group: Group, x: str, label: str | None = None) -> None:
         ax.fill_between(grid, low, high, color=color_of(group), alpha=0.2, lw=0)
 
 
+REFERENCE_STYLES = ("--", ":", "-.", (0, (1, 3)))
+
+
+def _published(env_id: str) -> tuple[tuple[str, float, str], ...]:
+    return domains.episodic_domain(env_id).references
+
+
 def _references(ax, env_id: str, reference: dict[str, Any] | None, legend: bool = True) -> None:
-    """Horizontal reference lines: the hand-coded dribbler and the upper bound, or Platform's published figures."""
+    """Horizontal reference lines: the hand-coded dribbler and the upper bound, or the domain's published figures."""
     if not domains.is_dribbling(env_id):
-        for (name, value, _), style in zip(domains.PLATFORM_REFERENCES, ("--", ":", "-.", (0, (1, 3))), strict=True):
+        for i, (name, value, _) in enumerate(_published(env_id)):
+            style = REFERENCE_STYLES[i % len(REFERENCE_STYLES)]
             ax.axhline(value, color="0.3", ls=style, lw=1.1, label=f"{name}, published ({value:.3g})" if legend else None)
         return
     if reference is None:
@@ -106,10 +116,10 @@ def _references(ax, env_id: str, reference: dict[str, Any] | None, legend: bool 
     ax.axhline(bound, color="0.45", ls=":", lw=1.5, label=f"{ref['bound']['label']} ({bound:.1f} m)" if legend else None)
 
 
-def _axes_style(ax, env_id: str, xlabel: str, ymax: float) -> None:
+def _axes_style(ax, env_id: str, xlabel: str, ylim: tuple[float, float]) -> None:
     ax.set_xlabel(xlabel)
-    ax.set_ylabel("greedy dribble distance (m)" if domains.is_dribbling(env_id) else "greedy mean return")
-    ax.set_ylim(0, ymax)
+    ax.set_ylabel(f"greedy {domains.metric_label(env_id)}")
+    ax.set_ylim(*ylim)
     ax.xaxis.set_major_formatter(_thousands())
 
 
@@ -119,12 +129,16 @@ def _thousands():
     return FuncFormatter(lambda v, _: f"{v / 1000:g}k" if abs(v) >= 1000 else f"{v:g}")
 
 
-def _ymax(references: dict[str, Any], env_ids: list[str], groups: list[Group]) -> float:
-    if not any(domains.is_dribbling(e) for e in env_ids):
-        return 1.05
-    top = [r["references"]["bound"]["mean"] for e, r in references.items() if e in env_ids]
-    top += [float(np.max(g.curve()[1])) for g in groups]
-    return max([25.0, *top]) * 1.08
+def _ylim(references: dict[str, Any], env_id: str, groups: list[Group]) -> tuple[float, float]:
+    """The score axis of an env: from 0 (or the lowest curve point, for returns that go negative) to above the
+    highest curve point and reference (at least 25 m on dribbling, 1.05 for shares and Platform's return)."""
+    top = [float(np.max(g.curve()[1])) for g in groups]
+    low = min([0.0, *(float(np.min(g.curve()[1])) for g in groups)])
+    if domains.is_dribbling(env_id):
+        top += [r["references"]["bound"]["mean"] for e, r in references.items() if e == env_id]
+        return 0.0, max([25.0, *top]) * 1.08
+    top += [value for _, value, _ in _published(env_id)]
+    return low * 1.08, max([1.0, *top]) * 1.05
 
 
 def family_figure(out: Path, family: str, groups: dict[str, list[Group]], references: dict[str, Any]) -> str | None:
@@ -139,7 +153,7 @@ def family_figure(out: Path, family: str, groups: dict[str, list[Group]], refere
         for g in fam:
             _plot_group(ax, g, "episodes")
         _references(ax, env_id, references.get(env_id))
-        _axes_style(ax, env_id, "training episodes", _ymax(references, [env_id], fam))
+        _axes_style(ax, env_id, "training episodes", _ylim(references, env_id, fam))
         ax.set_title(f"{env_short(env_id)}\n{budget_note(fam)}", fontsize=10)
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2, frameon=False)
     fig.suptitle(f"{FAMILY_TITLES[family]} (cf. paper {paper_fig})\nIQM over seeds with 95% bootstrap CI", fontsize=12)
@@ -165,7 +179,7 @@ def best_figure(out: Path, groups: dict[str, list[Group]], references: dict[str,
                 label = f"SarsaAAC {g.label}" if g.algo == "SarsaAAC" else g.label
                 _plot_group(ax, g, x, label)
             _references(ax, env_id, references.get(env_id))
-            _axes_style(ax, env_id, xlabel, _ymax(references, [env_id], chosen))
+            _axes_style(ax, env_id, xlabel, _ylim(references, env_id, chosen))
             if x == "train_s":
                 ax.set_xscale("log")
                 ax.xaxis.set_major_formatter(_thousands())
@@ -178,7 +192,7 @@ def best_figure(out: Path, groups: dict[str, list[Group]], references: dict[str,
             title_fontsize=8.5,
         )
     fig.suptitle(
-        "Best SarsaAAC config of each family, P-DQN/MP-DQN and the SB3 baselines (cf. paper Fig. 8)\n"
+        "Best SarsaAAC config of each family, the parameterized peers and the SB3 baselines (cf. paper Fig. 8)\n"
         "IQM over seeds with 95% bootstrap CI",
         fontsize=12,
     )
@@ -259,7 +273,7 @@ def final_figure(out: Path, groups: dict[str, list[Group]], references: dict[str
         ax.set_yticks(range(len(gs)), [g.label for g in gs])
         ref = references.get(env_id)
         if not domains.is_dribbling(env_id):
-            for name, value, _ in domains.PLATFORM_REFERENCES:
+            for name, value, _ in _published(env_id):
                 ax.axvline(value, color="0.45", ls=":", lw=1.2)
                 ax.text(value, len(gs) - 0.35, f"{name} {value:.3g} ", va="bottom", ha="right", fontsize=7.5, rotation=90)
             ax.set_ylim(-0.6, len(gs) + 0.1)
@@ -273,11 +287,14 @@ def final_figure(out: Path, groups: dict[str, list[Group]], references: dict[str
             label = ref["references"]["bound"]["label"]
             ax.text(bound, top, f"{label} {bound:.1f} m ", va="bottom", ha="right", fontsize=8.5, color="0.35")
             ax.set_ylim(-0.6, len(gs) + 0.1)
-        ax.set_xlabel("final greedy dribble distance (m)" if domains.is_dribbling(env_id) else "final greedy mean return")
-        ax.set_xlim(0, _ymax(references, [env_id], []) if ref or not domains.is_dribbling(env_id) else None)
+        ax.set_xlabel(f"final greedy {domains.metric_label(env_id)}")
+        if ref or not domains.is_dribbling(env_id):
+            low, high = _ylim(references, env_id, [])
+            lowest = min([low, *(float(np.min(g.final())) for g in gs)])
+            ax.set_xlim(lowest * 1.08 if lowest < 0 else lowest, high)
         ax.set_title(f"{env_short(env_id)}\n{budget_note(groups[env_id])}", fontsize=10)
         ax.grid(axis="y", alpha=0)
-    fig.suptitle("Final greedy distance per config\n(dots: seeds; tick: IQM; band: 95% bootstrap CI)", fontsize=12)
+    fig.suptitle("Final greedy score per config\n(dots: seeds; tick: IQM; band: 95% bootstrap CI)", fontsize=12)
     fig.tight_layout()
     fig.savefig(out / "fig_final.png", bbox_inches="tight")
     plt.close(fig)

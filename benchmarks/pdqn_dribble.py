@@ -22,10 +22,9 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from robocup_dribble import ENV_PROFILES, DribbleVecEnv
 from robocup_dribble.evaluation import evaluate_dribbling
+from benchmarks.presets import FINAL_SEED
 from benchmarks.zoo_hyperparams import settings
 from sb3_aac import MPDQN, PDQN
-
-FINAL_SEED = 20_000
 
 
 class EvaluateAtBudgets(BaseCallback):

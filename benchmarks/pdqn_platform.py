@@ -22,25 +22,15 @@ import json
 import time
 from typing import Any
 
-import gymnasium as gym
 import torch as th
-from stable_baselines3.common.env_util import make_vec_env
 
 from benchmarks import domains
-from benchmarks.zoo_hyperparams import env_wrapper, settings
+from benchmarks.reference_init import with_reference_start
+from benchmarks.zoo_hyperparams import settings, zoo_env
 from sb3_aac import MPDQN, PDQN
 from sb3_aac.common.checkpoints import GreedyCheckpoints
 
 ENVS = ("Platform-v0", "Goal-v0")
-
-
-def make_env(algo: str, env_id: str, seed: int, n_envs: int = 1):
-    """The training env: ``env_id`` with the ``env_wrapper`` chain of ``hyperparams/<algo>.yml``."""
-    import gym_platform  # noqa: F401  (registers Platform-v0)
-    import hybrid_domains  # noqa: F401  (registers Goal-v0)
-
-    wrap = env_wrapper(algo, env_id)
-    return make_vec_env(lambda: wrap(gym.make(env_id)), n_envs=n_envs, seed=seed)
 
 
 class GreedyEvaluation(GreedyCheckpoints):
@@ -86,11 +76,8 @@ def main() -> None:
         kwargs["exploration_fraction"] = args.exploration_fraction
     policy: Any = "MlpPolicy"
     if args.reference_init:
-        from benchmarks.reference_init import PassthroughPolicy
-
-        policy = PassthroughPolicy
-        kwargs["policy_kwargs"] = {**kwargs.get("policy_kwargs", {}), "initial_params": None}
-    model = algo(policy, make_env(args.algo, args.env, args.seed), seed=args.seed, device="cpu", **kwargs)
+        policy, kwargs = with_reference_start(kwargs)
+    model = algo(policy, zoo_env(args.algo, args.env, 1, args.seed), seed=args.seed, device="cpu", **kwargs)
     evaluation = GreedyEvaluation(args.env, args.eval_every, args.eval_episodes, 1000 + args.seed)
     start = time.perf_counter()
     model.learn(args.steps, callback=evaluation)

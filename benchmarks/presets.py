@@ -3,24 +3,30 @@
 Every number here is our choice; the reasons are next to them. A cell is plain data (:class:`Cell`), so it can be
 sent to a worker process and written into its result file as is.
 
-Three domains (:mod:`benchmarks.domains`): the dribbling envs of both server eras and Platform-v0 (PyPI
-``hybrid-platform``, Masson et al.'s Platform), each with its own budget.
+Seven domains (:mod:`benchmarks.domains`): the dribbling envs of both server eras, Platform-v0 (PyPI
+``hybrid-platform``, Masson et al.'s Platform) and the ``hybrid_domains`` Goal-v0, Moving-v0, Sliding-v0 and
+CatchPoint-v0, each with its own budget. What a preset costs: ``python -m benchmarks.run --preset P --estimate``
+(:mod:`benchmarks.cost`, from :data:`STEPS_PER_SECOND` and :data:`ENV_STEP_SECONDS`).
 
-SarsaAAC configs (:data:`SARSA_CONFIGS`): the recommended ``TilePolicy`` with its defaults, and the paper's three
-families (Uc-Cetina 2013, Figs. 5-7), all other hyperparameters at the SarsaAAC defaults (16 lanes):
+SarsaAAC configs (:data:`SARSA_CONFIGS`): the recommended ``TilePolicy`` with its defaults, ``DeepPolicy``, and the
+paper's three families (Uc-Cetina 2013, Figs. 5-7), all other hyperparameters at the SarsaAAC defaults (16 lanes):
 
 * ``tile``: ``TilePolicy`` (hashed tilings over the inputs and their pairs; the recommended policy, docs/sarsa_aac.md);
+* ``deep``: ``DeepPolicy`` (layer-normalised 2x64 nets with ObGD steps) with SarsaAAC's one-step updates
+  (``trace_lambda=0``): as good as the streaming paper's 0.8 or better, and cheaper (docs/sarsa_aac.md, Deep policy);
 * ``mlp2/10/20``: ``MlpPolicy`` with 2, 10, 20 hidden tanh units per approximator;
 * ``rbfmlp2/10/20``: ``RbfMlpPolicy``, a filter layer of 10 Gaussian RBFs per input, then 2, 10, 20 hidden units;
 * ``rbf10/30/50``: ``RbfPolicy``, arrays of 10, 30, 50 Gaussian RBFs per input, linear output.
 
-Parameterized-action peers (:data:`PEERS`): P-DQN and MP-DQN with the settings of ``hyperparams/<algo>.yml``.
+Parameterized-action peers (:data:`PEERS`): P-DQN, MP-DQN and HybridPPO with the settings of ``hyperparams/<algo>.yml``
+for the env (an env without an entry: see :data:`PEERS`).
 SB3 baselines (:data:`BASELINES`) through :class:`~sb3_aac.FlattenParameterizedAction` (PPO, A2C, SAC, TD3, DDPG:
 one score per action type then every parameter) or :class:`~sb3_aac.DiscretizeParameterizedAction` (DQN: 5 values
 per parameter). **Fairness rule**: every off-policy learner (SAC, TD3, DDPG, DQN, P-DQN, MP-DQN) takes one gradient
 step per transition (SB3's default for SAC/TD3/DDPG with one env; ``n_envs`` lanes and ``gradient_steps=n_envs``), and
 otherwise keeps its documented defaults (SB3's, or the reference MP-DQN code's); none is tuned for these tasks, and
-neither is SarsaAAC (its defaults were chosen on several tasks, see its docstring).
+neither is SarsaAAC (its defaults were chosen on several tasks, see its docstring). The tuned twins
+(``<config>-tuned``) of the headline learners run the best settings of an equal-size study each (:mod:`benchmarks.tuning`).
 """
 
 from __future__ import annotations
@@ -51,23 +57,25 @@ RELIABILITY_SEED = 30_000  # the reliability test (10,000 fresh players, one epi
 
 SARSA_N_ENVS = 16  # lanes for SarsaAAC (the quick start's setting)
 
-# name: (family, policy, policy_kwargs)
-SARSA_CONFIGS: dict[str, tuple[str, str, dict[str, Any]]] = {
-    "tile": ("Tiles", "TilePolicy", {}),
-    "mlp2": ("MLP", "MlpPolicy", {"hidden_units": 2}),
-    "mlp10": ("MLP", "MlpPolicy", {"hidden_units": 10}),
-    "mlp20": ("MLP", "MlpPolicy", {"hidden_units": 20}),
-    "rbfmlp2": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 2}),
-    "rbfmlp10": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 10}),
-    "rbfmlp20": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 20}),
-    "rbf10": ("RBF", "RbfPolicy", {"n_rbf": 10}),
-    "rbf30": ("RBF", "RbfPolicy", {"n_rbf": 30}),
-    "rbf50": ("RBF", "RbfPolicy", {"n_rbf": 50}),
+# name: (family, policy, policy_kwargs, SarsaAAC keyword arguments beyond its defaults)
+SARSA_CONFIGS: dict[str, tuple[str, str, dict[str, Any], dict[str, Any]]] = {
+    "tile": ("Tiles", "TilePolicy", {}, {}),
+    "deep": ("Deep", "DeepPolicy", {}, {}),
+    "mlp2": ("MLP", "MlpPolicy", {"hidden_units": 2}, {}),
+    "mlp10": ("MLP", "MlpPolicy", {"hidden_units": 10}, {}),
+    "mlp20": ("MLP", "MlpPolicy", {"hidden_units": 20}, {}),
+    "rbfmlp2": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 2}, {}),
+    "rbfmlp10": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 10}, {}),
+    "rbfmlp20": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 20}, {}),
+    "rbf10": ("RBF", "RbfPolicy", {"n_rbf": 10}, {}),
+    "rbf30": ("RBF", "RbfPolicy", {"n_rbf": 30}, {}),
+    "rbf50": ("RBF", "RbfPolicy", {"n_rbf": 50}, {}),
 }
-FAMILIES = ("Tiles", "MLP", "MLP+RBF", "RBF")  # SarsaAAC's
+FAMILIES = ("Tiles", "Deep", "MLP", "MLP+RBF", "RBF")  # SarsaAAC's
 PAPER_FAMILIES = ("MLP", "MLP+RBF", "RBF")
 CONFIG_LABELS = {
     "tile": "TilePolicy (recommended)",
+    "deep": "DeepPolicy",
     "mlp2": "MLP (2 hidden)",
     "mlp10": "MLP (10 hidden)",
     "mlp20": "MLP (20 hidden)",
@@ -83,12 +91,29 @@ CONFIG_LABELS = {
 OFF_POLICY_ENVS = 4
 REPLAY_RATIO_ONE = {"train_freq": 1, "gradient_steps": OFF_POLICY_ENVS}
 
-# P-DQN / MP-DQN: hyperparams/<algo>.yml's entry for the env, with n_envs and gradient steps set by the fairness rule
-# (the reference MP-DQN code also takes one update per env step).
+# The parameterized peers: hyperparams/<yml>.yml's entry for the env, then n_envs and "kwargs". P-DQN / MP-DQN take
+# one gradient step per transition by the fairness rule (the reference MP-DQN code also takes one update per env
+# step). An env without an entry in the yml gets the entry of env "fallback" (None: the algorithm's constructor
+# defaults; the P-DQN / MP-DQN entries carry their env's initial parameters, so they do not carry over).
+# HybridPPO's entries are one rule (hppo.yml: the PPO baseline's rollout shape, 8 lanes x 256 steps, minibatches of
+# 256, and a type-entropy bonus of 0.01), so its Platform entry is the rule for the envs it does not list. On an
+# episodic domain with its own entry a peer trains on that entry's env_wrapper chain, as rl-zoo3 does (the same
+# observations as the domain's evaluation env; on Goal the reference's reward scale of 1/50), and on the ids of
+# "reference_start" it starts its parameter actor at the reference MP-DQN code's function (benchmarks.reference_init):
+# with the yml's constant start MP-DQN never scored on Goal (P(goal) 0.0 after 60k steps, 0.684 with the reference's;
+# docs/pdqn.md).
 PEERS: dict[str, dict[str, Any]] = {
-    "PDQN": {"n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE)},
-    "MPDQN": {"n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE)},
+    "PDQN": {"yml": "pdqn", "n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE), "fallback": None},
+    "MPDQN": {
+        "yml": "mpdqn",
+        "n_envs": OFF_POLICY_ENVS,
+        "kwargs": dict(REPLAY_RATIO_ONE),
+        "fallback": None,
+        "reference_start": ("Goal-v0",),
+    },
+    "HybridPPO": {"yml": "hppo", "n_envs": 8, "kwargs": {}, "fallback": PLATFORM_ID},
 }
+ON_POLICY_PEERS = ("HybridPPO",)
 
 # The small net every baseline uses: SB3's default for PPO, A2C and DQN. SAC/TD3/DDPG default to 256x256 and
 # 400x300; we give them 64x64 too, so the baselines compare algorithms rather than net sizes, and because a
@@ -128,22 +153,57 @@ BASELINES: dict[str, dict[str, Any]] = {
 }
 ON_POLICY = ("PPO", "A2C")
 
-# Rough env steps per second of training on one core, per algorithm (measured on the development machine at the
-# settings above): the local pool starts the longest cells first, and a wall-clock cell's schedule horizon is what
-# its learner steps in its seconds.
+# Env steps per second of training on one core, per algorithm (a "<algo>-<config>" key for a config that differs),
+# at the settings above on the dribbling env, whose lanes step in compiled code: the median of env_steps /
+# train_wall_s over the finished cells of benchmarks/results (50k steps, load 2-3 on two cores); DeepPolicy and
+# HybridPPO (no such cells) as their same-run ratio to TilePolicy and PPO times those figures (docs/benchmarks.md,
+# "Cost"). With ENV_STEP_SECONDS they give a learner's rate on each env (training_rate): the local pool starts the
+# longest cells first, a wall-clock cell's schedule horizon is what its learner steps in its seconds, and
+# benchmarks.cost estimates a preset's core-hours.
 STEPS_PER_SECOND = {
-    "SarsaAAC": 5000,
-    "PPO": 1600,
-    "A2C": 2000,
-    "SAC": 250,
-    "TD3": 400,
-    "DDPG": 450,
-    "DQN": 900,
+    "SarsaAAC": 30_000,
+    "SarsaAAC-deep": 7_000,
+    "PPO": 9_300,
+    "A2C": 11_700,
+    "SAC": 290,
+    "TD3": 570,
+    "DDPG": 460,
+    "DQN": 1_300,
     "PDQN": 350,
-    "MPDQN": 300,
+    "MPDQN": 250,
+    "HybridPPO": 7_600,
+}
+# Seconds of one env step in a training VecEnv, the learner's work excluded: Platform's from its finished cells
+# (1 / rate there - 1 / rate on dribbling, for SarsaAAC, PPO and TD3: 2.5-3.8 ms), the hybrid domains' from the CPU
+# time of random actions through benchmarks.domains.train_env (8 lanes), which agrees with SarsaAAC's TilePolicy on
+# Goal and Moving against on dribbling in the same run; the dribbling lanes step in compiled code.
+ENV_STEP_SECONDS = {
+    "RoboCupDribblePaper-v0": 1e-6,
+    "RoboCupDribble-v0": 1e-6,
+    PLATFORM_ID: 3e-3,
+    "Goal-v0": 6e-4,
+    "Moving-v0": 4e-5,
+    "Sliding-v0": 4e-5,
+    "CatchPoint-v0": 6e-5,
 }
 
 TUNED_SUFFIX = "-tuned"  # a config "<config>-tuned" runs <config> with the settings of its tuning study
+
+
+def steps_per_second(algo: str, config: str) -> float:
+    """A learner's :data:`STEPS_PER_SECOND`: its ``"<algo>-<config>"`` entry if it has one, else its algorithm's."""
+    key = f"{algo}-{base_config(config)}"
+    if key in STEPS_PER_SECOND:
+        return float(STEPS_PER_SECOND[key])
+    if algo not in STEPS_PER_SECOND:
+        raise ValueError(f"no training rate for {algo} ({config}); known: {sorted(STEPS_PER_SECOND)}")
+    return float(STEPS_PER_SECOND[algo])
+
+
+def training_rate(env_id: str, algo: str, config: str) -> float:
+    """Env steps per second of training on one core: the learner's :func:`steps_per_second` slowed by the env's own
+    step cost (:data:`ENV_STEP_SECONDS`)."""
+    return 1.0 / (1.0 / steps_per_second(algo, config) + ENV_STEP_SECONDS.get(env_id, 0.0))
 
 
 def base_config(config: str) -> str:
@@ -249,20 +309,28 @@ HEADLINE_SEEDS = tuple(range(10))  # the best of each family on each env: >= 10 
 FEW_SEEDS = tuple(range(3))
 PAPER_SEEDS = tuple(range(5))
 
-# full: sized for about an hour and a half of a 2-core machine (measured per cell: one gradient step costs ~2-3 ms
-# on one core, so an off-policy cell of 50k steps takes ~2-3 min; SarsaAAC cells take seconds). Headline pairs: the
-# recommended SarsaAAC policy, MP-DQN (the parameterized peer users would pick; P-DQN with fewer seeds) and TD3 (the
-# best wrapped SB3 baseline of the first benchmark on both dribbling envs; on Platform PPO, the best of a first 3-seed
-# run) with 10 seeds; the paper's configs with 5; the other baselines with 3. Budgets: 50k env steps on dribbling
-# (~3,500 SarsaAAC episodes), 20k on Platform.
+# full: its cost, per stage, is what `python -m benchmarks.run --preset full --estimate` prints (benchmarks.cost).
+# Headline pairs: the recommended SarsaAAC policy and DeepPolicy, MP-DQN (the parameterized peer users would pick;
+# P-DQN with fewer seeds) and TD3 (the best wrapped SB3 baseline of the first benchmark on both dribbling envs; on
+# Platform PPO, the best of a first 3-seed run) with 10 seeds; the paper's configs with 5; the other baselines with
+# 3. HybridPPO is a headline peer where an H-PPO figure is published (Platform, Moving) or PPO is the headline
+# baseline. Budgets: 50k env steps on dribbling (~3,500 SarsaAAC episodes), 20k on Platform; the hybrid domains'
+# beside them (_HYBRID_DOMAINS).
 _DRIBBLE_RUNS = [
     ("SarsaAAC", "tile", HEADLINE_SEEDS),
+    ("SarsaAAC", "deep", HEADLINE_SEEDS),
     ("MPDQN", "mpdqn", HEADLINE_SEEDS),
     ("TD3", "td3", HEADLINE_SEEDS),
 ]
-_PLATFORM_HEADLINE = [("SarsaAAC", "tile"), ("MPDQN", "mpdqn"), ("PPO", "ppo")]
+_PLATFORM_HEADLINE = [
+    ("SarsaAAC", "tile"),
+    ("SarsaAAC", "deep"),
+    ("MPDQN", "mpdqn"),
+    ("HybridPPO", "hybridppo"),
+    ("PPO", "ppo"),
+]
 # Equal wall-clock budget: the headline learners train for the same seconds of one core, evaluations excluded
-# (benchmarks.wall_clock); 120 s is about the time TD3 needs for the 50k-step budget, and 60x SarsaAAC's.
+# (benchmarks.wall_clock); 120 s is about the time TD3 needs for the 50k-step budget, and 70x SarsaAAC's (TilePolicy).
 WALL_CLOCK_SECONDS = 120
 WALL_CLOCK_SEEDS = PAPER_SEEDS
 # The long budget of the dribbling envs, sized for the paper's episode counts: on the paper env (seed 0, 16 lanes)
@@ -290,6 +358,55 @@ def _headline(runs: list[tuple[str, str, tuple[int, ...]]]) -> list[tuple[str, s
     return [(algo, config) for algo, config, seeds in runs if len(seeds) >= len(HEADLINE_SEEDS)]
 
 
+# The hybrid domains (envs/hybrid_domains): per env id its budget, its headline learners (10 seeds, tuned twins,
+# tuning studies, the wall-clock view) and the long budget's runs (5 seeds; None: no long budget). Every other
+# parameterized learner and one SB3 baseline run with 3 seeds.
+# * Goal-v0: 60k env steps, the reference MP-DQN code's 20,000 episodes of ~3 actions (hyperparams/mpdqn.yml), after
+#   which Bester et al. report P(goal) 0.789; HyAR-TD3's figure is TD3-based, so TD3 is the headline baseline.
+# * CatchPoint-v0: 100k env steps, ~6,000 episodes (at most 25 steps; the scripted policy's take 14); the HyAR figure
+#   we cite (0.90) comes without a step count we could check; TD3 headline as on Goal.
+# * Moving-v0: H-PPO's ~1.7 is after 3M env steps (DI-engine's curves); 3M steps of MP-DQN are ~3 core-hours a seed,
+#   so the main budget is 100k (~1,000 episodes of at most 200 steps) and the long budget 3M for the learners that
+#   take it in minutes (SarsaAAC) or for which the figure is published (HybridPPO, and PPO, its flattened twin).
+# * Sliding-v0: no published figure; Moving's main budget and learners, no long budget.
+_HYBRID_LONG_BUDGET = 3_000_000
+_HYBRID_DOMAINS: dict[str, tuple[int, list[tuple[str, str]], list[tuple[str, str]] | None]] = {
+    "Goal-v0": (60_000, [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn"), ("TD3", "td3")], None),
+    "CatchPoint-v0": (100_000, [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn"), ("TD3", "td3")], None),
+    "Moving-v0": (
+        100_000,
+        [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn"), ("HybridPPO", "hybridppo"), ("PPO", "ppo")],
+        [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("HybridPPO", "hybridppo"), ("PPO", "ppo")],
+    ),
+    "Sliding-v0": (
+        100_000,
+        [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn"), ("HybridPPO", "hybridppo"), ("PPO", "ppo")],
+        None,
+    ),
+}
+_HYBRID_OTHERS = tuple((algo, algo.lower()) for algo in ("PDQN", "MPDQN", "HybridPPO", "PPO", "TD3", "SAC"))
+
+
+def _hybrid_domain(
+    env_id: str, budget: int, headline: list[tuple[str, str]], long: list[tuple[str, str]] | None
+) -> dict[str, Any]:
+    """A hybrid domain's entry of :data:`FULL`: the headline learners with 10 seeds and their tuned twins, the other
+    learners of :data:`_HYBRID_OTHERS` with 3, the wall-clock view of the headline learners, the long budget's runs."""
+    others = [(algo, config, FEW_SEEDS) for algo, config in _HYBRID_OTHERS if (algo, config) not in headline]
+    spec: dict[str, Any] = {
+        "budget": budget,
+        "runs": [
+            *((algo, config, HEADLINE_SEEDS) for algo, config in headline),
+            *_tuned(headline, HEADLINE_SEEDS),
+            *others,
+        ],
+        "wall_clock": {"seconds": WALL_CLOCK_SECONDS, "runs": [(a, c, WALL_CLOCK_SEEDS) for a, c in headline]},
+    }
+    if long is not None:
+        spec["long"] = {"budget": _HYBRID_LONG_BUDGET, "runs": [(a, c, LONG_SEEDS) for a, c in long]}
+    return spec
+
+
 FULL: dict[str, Any] = {
     "envs": {
         "RoboCupDribblePaper-v0": {
@@ -299,6 +416,7 @@ FULL: dict[str, Any] = {
                 *_tuned(_headline(_DRIBBLE_RUNS), HEADLINE_SEEDS),
                 *(("SarsaAAC", config, PAPER_SEEDS) for config in ("rbf50", "rbfmlp2", "mlp2")),
                 ("PDQN", "pdqn", FEW_SEEDS),
+                ("HybridPPO", "hybridppo", FEW_SEEDS),  # 0.7 m at 50k steps (docs/hppo.md): no headline learner here
                 *((algo, algo.lower(), FEW_SEEDS) for algo in ("SAC", "DDPG", "DQN", "PPO", "A2C")),
             ],
             "long": {
@@ -315,7 +433,11 @@ FULL: dict[str, Any] = {
         },
         "RoboCupDribble-v0": {
             "budget": 50_000,
-            "runs": [*_DRIBBLE_RUNS, *_tuned(_headline(_DRIBBLE_RUNS), HEADLINE_SEEDS)],
+            "runs": [
+                *_DRIBBLE_RUNS,
+                *_tuned(_headline(_DRIBBLE_RUNS), HEADLINE_SEEDS),
+                *((algo, algo.lower(), FEW_SEEDS) for algo in ("PDQN", "HybridPPO", "PPO")),
+            ],
             "long": {"budget": LONG_BUDGET, "runs": [(a, c, LONG_SEEDS) for a, c in _headline(_DRIBBLE_RUNS)]},
             "wall_clock": {
                 "seconds": WALL_CLOCK_SECONDS,
@@ -326,7 +448,9 @@ FULL: dict[str, Any] = {
             "budget": 20_000,
             "runs": [
                 ("SarsaAAC", "tile", HEADLINE_SEEDS),
+                ("SarsaAAC", "deep", HEADLINE_SEEDS),
                 ("MPDQN", "mpdqn", HEADLINE_SEEDS),
+                ("HybridPPO", "hybridppo", HEADLINE_SEEDS),  # H-PPO's published 0.80 (domains.PLATFORM_REFERENCES)
                 ("PDQN", "pdqn", FEW_SEEDS),
                 ("TD3", "td3", FEW_SEEDS),
                 ("PPO", "ppo", HEADLINE_SEEDS),  # the best SB3 baseline on Platform in a first 3-seed run (0.42)
@@ -337,6 +461,7 @@ FULL: dict[str, Any] = {
                 "runs": [(algo, config, WALL_CLOCK_SEEDS) for algo, config in _PLATFORM_HEADLINE],
             },
         },
+        **{env_id: _hybrid_domain(env_id, *spec) for env_id, spec in _HYBRID_DOMAINS.items()},
     },
     "tuning": FULL_TUNING,
     "eval_every": 500,
@@ -365,7 +490,7 @@ def build_cells(preset: str | dict[str, Any]) -> list[Cell]:
         if "wall_clock" in spec:  # equal seconds of training; the env-step horizon is what the learner steps in them
             seconds = spec["wall_clock"]["seconds"]
             for algo, config, seeds in spec["wall_clock"]["runs"]:
-                horizon = STEPS_PER_SECOND[algo] * seconds
+                horizon = round(training_rate(env_id, algo, config) * seconds)
                 cells += [Cell(env_id, algo, config, seed, horizon, **common, seconds=seconds) for seed in seeds]
     return cells
 

@@ -1,4 +1,5 @@
-"""The reference MP-DQN code's initial action-parameter policy on Goal-v0, for an experiment beside the yml settings.
+"""The reference MP-DQN code's initial action-parameter policy on Goal-v0, beside the yml settings (the grid's MP-DQN
+on Goal-v0 and ``benchmarks.pdqn_platform --reference-init``).
 
 cycraig/MP-DQN (``run_goal_pdqn.py``, ``initialise_params=True``) starts the parameter actor at a fixed linear function
 of the scaled observation (``set_action_parameter_passthrough_weights``: a frozen "passthrough" layer added to the
@@ -63,3 +64,9 @@ class PassthroughPolicy(MlpPolicy):
         weight, bias = goal_passthrough(np.asarray(box.low, dtype=float), np.asarray(box.high, dtype=float))
         self.actor = WithPassthrough(self.actor, weight, bias)
         self.actor_target = WithPassthrough(self.actor_target, weight, bias)
+
+
+def with_reference_start(kwargs: dict[str, Any]) -> tuple[type[PassthroughPolicy], dict[str, Any]]:
+    """The policy and keyword arguments that start a P-DQN / MP-DQN with settings ``kwargs`` at the reference's
+    function on Goal-v0: :class:`PassthroughPolicy`, whose passthrough carries the bias, so no ``initial_params``."""
+    return PassthroughPolicy, {**kwargs, "policy_kwargs": {**kwargs.get("policy_kwargs", {}), "initial_params": None}}

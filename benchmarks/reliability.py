@@ -78,8 +78,8 @@ def reliability_entry(policy: Any, profile: str, n_players: int, source: dict[st
 
 def run_reliability(out: str | Path, n_players: int = RELIABILITY_PLAYERS, progress: bool = True) -> dict[str, Any]:
     """The reliability test (``n_players`` fresh players, one episode each) of the best SarsaAAC policy, the best
-    P-DQN/MP-DQN policy, the best SB3 baseline and the hand-coded dribbler of each dribbling env; cached in
-    ``DIR/reliability.json`` (recomputed only for an entry whose policy or player count changed)."""
+    parameterized peer (P-DQN, MP-DQN, HybridPPO), the best SB3 baseline and the hand-coded dribbler of each dribbling
+    env; cached in ``DIR/reliability.json`` (recomputed only for an entry whose policy or player count changed)."""
     from robocup_dribble.dribbler import HandCodedDribbler
 
     th.set_num_threads(1)

@@ -81,7 +81,8 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         rel_fig = "fig_reliability.png" if reliability else None
 
     lines = [
-        "# Benchmark: SarsaAAC against P-DQN, MP-DQN and SB3 baselines on RoboCup dribbling and Platform",
+        "# Benchmark: SarsaAAC against P-DQN, MP-DQN, HybridPPO and SB3 baselines on RoboCup dribbling, Platform and the "
+        "hybrid-action domains",
         "",
         f"Generated {time.strftime('%Y-%m-%d %H:%M')} from {len(results)} cell files in `{out}`.",
         "",
@@ -137,13 +138,13 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
             "",
         ]
     if final:
-        lines += ["### Final distance of every config", "", f"![final]({final})", ""]
+        lines += ["### Final score of every config", "", f"![final]({final})", ""]
     lines += ["## Reliability test (paper Figs. 9-10)", ""]
     if reliability:
         lines += [
             f"10,000 fresh players (a new player-type set for every episode, seed {reliability['seed']}), "
             "one episode each, greedy. "
-            "The policies are the best SarsaAAC cell, the best P-DQN/MP-DQN cell and the best SB3 baseline cell of each "
+            "The policies are the best SarsaAAC cell, the best parameterized-peer cell and the best SB3 baseline cell of each "
             "dribbling env (best config by mean final distance, "
             "then its best seed, both chosen on the final evaluation set, not on these players), and the hand-coded dribbler.",
             "",

@@ -4,6 +4,7 @@ Usage::
 
     python -m benchmarks.run --preset quick|full [--out DIR] [--workers 2] [--only PATTERN[,PATTERN...]]
                              [--engine local|ray [--address ADDR]] [--allow-dirty]
+    python -m benchmarks.run --preset full --estimate [--only ...]  # core-hours per stage, run nothing
     python -m benchmarks.run --reliability [--out DIR]      # the reliability test of the best policies
     python -m benchmarks.run --tune --preset P [--trials N] [--storage JOURNAL_OR_URL] [--only ...] [--engine ...]
     python -m benchmarks.report DIR                         # report.md and figures from the cell files
@@ -26,6 +27,10 @@ A sweep refuses to start when tracked files have uncommitted changes, unless ``-
 cell with the commit, :mod:`benchmarks.provenance`); ``DIR/runs.jsonl`` logs every invocation when it starts and
 when it ends, interrupted ones too.
 
+``--estimate`` prints what the preset (or its ``--only`` cells and studies) costs, per stage (the grid's main
+budgets, the long budgets, the equal wall-clock budget, the tuning stage) and env, in core-hours
+(:mod:`benchmarks.cost`), and runs nothing.
+
 ``--tune`` runs the tuning stage instead of the grid (:mod:`benchmarks.tuning`): one Optuna study per tuned learner
 and env of the preset, their best settings written to ``hyperparams/tuned/<env id>/<learner>.yml`` (``--tuned-dir``
 another folder), which the grid's ``<config>-tuned`` cells read.
@@ -46,6 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks import cells
+from benchmarks.cost import estimate_text
 from benchmarks.engines import RayEngine
 from benchmarks.presets import PRESETS, Cell, build_cells, select
 from benchmarks.provenance import (
@@ -87,6 +93,9 @@ def main(argv: list[str] | None = None) -> int:
         "--only", default=None, help="comma-separated glob patterns of cell ids (a plain word matches as a substring)"
     )
     parser.add_argument("--list", action="store_true", help="list the cells (and whether they are finished), run nothing")
+    parser.add_argument(
+        "--estimate", action="store_true", help="print the core-hours per stage (grid, long, wall-clock, tuning), run nothing"
+    )
     parser.add_argument("--reliability", action="store_true", help="run the reliability test of the best policies in --out")
     parser.add_argument("--players", type=_positive_int, default=RELIABILITY_PLAYERS, help="players of the reliability test")
     parser.add_argument(
@@ -114,8 +123,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("give --preset (run the grid) and/or --reliability")
     if args.address and args.engine != "ray":
         parser.error("--address needs --engine ray")
-    if _tuning_arguments(parser, args):
-        return tune(parser, args)
+    tuning = _tuning_arguments(parser, args)
+    if args.estimate or tuning:
+        return (estimate if args.estimate else tune)(parser, args)
     out = Path(args.out or f"runs/bench-{args.preset or 'full'}")
     if not args.list:
         try:
@@ -170,6 +180,17 @@ def main(argv: list[str] | None = None) -> int:
         run_reliability(out, args.players)
         print(f"reliability test written to {out / 'reliability.json'}")
     return 1 if args.preset and status["failed"] else 0
+
+
+def estimate(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """``--estimate``: the preset's core-hours per stage and env (:func:`benchmarks.cost.estimate_text`)."""
+    if not args.preset or args.reliability or args.list or args.tune:
+        parser.error("--estimate needs --preset and runs nothing else (no --reliability, --list or --tune)")
+    if not select(build_cells(args.preset), args.only) and args.only:
+        parser.error(f"--only {args.only!r} matches none of the cells of preset {args.preset!r} (see --list)")
+    print(f"Estimated cost of preset {args.preset!r}{f' (--only {args.only})' if args.only else ''}, core-hours:")
+    print(estimate_text(args.preset, args.only))
+    return 0
 
 
 def _with_tuned_settings(grid: list[Cell]) -> list[Cell]:

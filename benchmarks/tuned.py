@@ -2,8 +2,8 @@
 
 Search spaces: rl-zoo3's samplers (``rl_zoo3.hyperparams_opt.HYPERPARAMS_SAMPLER``) for SB3's algorithms, which
 train through the action wrappers exactly as the grid runs them (:mod:`benchmarks.adapters`; the sampler sees the
-wrapped action size), and sb3-aac's (:data:`sb3_aac.tune.search_spaces.SEARCH_SPACES`) for SarsaAAC, P-DQN and
-MP-DQN. A learner is an algorithm and a config of the grid (``("SarsaAAC", "tile")``, ``("TD3", "td3")``).
+wrapped action size), and sb3-aac's (:data:`sb3_aac.tune.search_spaces.SEARCH_SPACES`) for SarsaAAC, P-DQN,
+MP-DQN and HybridPPO. A learner is an algorithm and a config of the grid (``("SarsaAAC", "tile")``, ``("TD3", "td3")``).
 
 A tuned file holds the best trial's Optuna parameters (``params``, plain numbers and strings) with the study's
 budget. A cell of config ``<config>-tuned`` carries those parameters in ``overrides["tuned_params"]``
@@ -31,9 +31,7 @@ TUNED_PARAMS = "tuned_params"  # the key of a tuned cell's overrides holding the
 TUNING_RECORD = "tuning"  # ... and the one holding its study's budget and best value (for the report)
 
 # sb3-aac's search spaces: algo -> its key in sb3_aac.tune's tables (the policy comes from the config).
-# HybridPPO: add ("hybrid_ppo", "MlpPolicy") to sb3_aac.tune.search_spaces.SEARCH_SPACES and "HybridPPO":
-# "hybrid_ppo" here; nothing else changes.
-SB3_AAC_SPACES = {"SarsaAAC": "sarsa_aac", "PDQN": "pdqn", "MPDQN": "mpdqn"}
+SB3_AAC_SPACES = {"SarsaAAC": "sarsa_aac", "PDQN": "pdqn", "MPDQN": "mpdqn", "HybridPPO": "hppo"}
 NO_HER = {"using_her_replay_buffer": False, "her_kwargs": {}}  # rl-zoo3's additional_args for a sampler
 
 

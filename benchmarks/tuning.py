@@ -8,7 +8,10 @@ steps of training x ``seeds`` tuning seeds per trial, the trial's value the mean
 (:func:`sb3_aac.tune.study.tpe_sampler`, :func:`~sb3_aac.tune.study.median_pruner`: multivariate TPE after
 :data:`STARTUP_TRIALS` random trials; the median rule on ``evaluations`` greedy evaluations during training, spaced
 ``env_steps / evaluations`` apart). The spaces are :mod:`benchmarks.tuned`'s: rl-zoo3's samplers for SB3's
-algorithms through the grid's action wrappers, sb3-aac's for SarsaAAC, P-DQN and MP-DQN.
+algorithms through the grid's action wrappers, sb3-aac's for SarsaAAC, P-DQN, MP-DQN and HybridPPO.
+
+Cost: ``python -m benchmarks.run --preset P --estimate`` prints the stage's core-hours beside the grid's
+(:func:`benchmarks.cost.trial_seconds`: every trial counted unpruned, an upper bound).
 
 Seeds: a trial trains with seeds :data:`TUNE_SEED`, ``TUNE_SEED + 1``, ... and is scored on the episodes of set
 :data:`TUNE_EVAL_SEED`; the grid trains with seeds 0-9 and is scored on sets 10,000 (curves) and 20,000 (final), so
@@ -284,28 +287,26 @@ def _run_ray(tasks: Sequence[Task], engine: Any, report: Report) -> None:
 
     from benchmarks.engines import WORKER_ENV, _python_path
 
-    started_here = engine._connect()
-    remote = ray.remote(run_trial).options(
-        num_cpus=1,
-        max_retries=engine.max_retries,
-        retry_exceptions=False,
-        runtime_env={"env_vars": {**WORKER_ENV, **_python_path()}},
-    )
-    pending = {remote.remote(*task): task for task in tasks}
-    try:
-        while pending:
-            finished, _ = ray.wait(list(pending), num_returns=1)
-            task = pending.pop(finished[0])
-            try:
-                report(*ray.get(finished[0]))
-            except ray.exceptions.RayError as error:
-                report(StudySpec(**task[0]).name, "failed", f"Ray could not run the trial: {error}")
-    finally:
-        for ref in pending:
-            with contextlib.suppress(Exception):
-                ray.cancel(ref, force=True)
-        if started_here:
-            ray.shutdown()
+    with engine.connected():
+        remote = ray.remote(run_trial).options(
+            num_cpus=1,
+            max_retries=engine.max_retries,
+            retry_exceptions=False,
+            runtime_env={"env_vars": {**WORKER_ENV, **_python_path()}},
+        )
+        pending = {remote.remote(*task): task for task in tasks}
+        try:
+            while pending:
+                finished, _ = ray.wait(list(pending), num_returns=1)
+                task = pending.pop(finished[0])
+                try:
+                    report(*ray.get(finished[0]))
+                except ray.exceptions.RayError as error:
+                    report(StudySpec(**task[0]).name, "failed", f"Ray could not run the trial: {error}")
+        finally:
+            for ref in pending:
+                with contextlib.suppress(Exception):
+                    ray.cancel(ref, force=True)
 
 
 def prepare(studies: Sequence[StudySpec], storage: str | None, folder: Path) -> dict[str, str]:

@@ -10,10 +10,17 @@ from typing import Any
 
 import gymnasium as gym
 import yaml
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.vec_env import VecEnv
 
 HYPERPARAMS = Path(__file__).resolve().parents[1] / "hyperparams"
 # rl-zoo3's own keys: how long, which policy, and how the env is wrapped (the scripts build their envs themselves).
 ZOO_KEYS = ("n_timesteps", "policy", "env_wrapper")
+
+
+def has_settings(algo: str, env_id: str) -> bool:
+    """Whether ``hyperparams/<algo>.yml`` has an entry for ``env_id``."""
+    return env_id in yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())
 
 
 def settings(algo: str, env_id: str) -> dict[str, Any]:
@@ -42,3 +49,13 @@ def env_wrapper(algo: str, env_id: str) -> Callable[[gym.Env], gym.Env]:
         return env
 
     return wrap
+
+
+def zoo_env(algo: str, env_id: str, n_envs: int, seed: int) -> VecEnv:
+    """``n_envs`` lanes of ``env_id`` behind the ``env_wrapper`` chain of its entry in ``hyperparams/<algo>.yml``, in
+    SB3's ``DummyVecEnv``: the env rl-zoo3 trains on with that file (Platform-v0 and the hybrid domains)."""
+    import gym_platform  # noqa: F401  (registers Platform-v0)
+    import hybrid_domains  # noqa: F401  (registers Goal-v0 and the others)
+
+    wrap = env_wrapper(algo, env_id)
+    return make_vec_env(lambda: wrap(gym.make(env_id)), n_envs=n_envs, seed=seed)

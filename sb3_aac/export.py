@@ -1,5 +1,6 @@
 """
-Export a trained SarsaAAC policy for a runtime without torch or Stable-Baselines3 (a RoboCup agent, a C++ program).
+Export a trained SarsaAAC, HybridPPO, P-DQN or MP-DQN policy for a runtime without torch or Stable-Baselines3 (a
+RoboCup agent, a C++ program).
 
 The file holds plain float64 arrays and a JSON description, never pickled objects; see ``docs/export-format.md``
 and :class:`sb3_aac.runtime.RuntimePolicy`, which reads it with numpy alone::
@@ -47,7 +48,8 @@ def _policy_of(model: Any) -> ExportablePolicy:
     if not isinstance(policy, (DenseBankPolicy, TilePolicy, DeepPolicy)):
         raise ValueError(
             "export_policy needs a SarsaAAC model or a SarsaAACPolicy on a numpy bank (MlpPolicy, RbfMlpPolicy, "
-            f"RbfPolicy, TilePolicy, DeepPolicy or their subclasses), or a HybridPPO model, got {type(model).__name__}"
+            f"RbfPolicy, TilePolicy, DeepPolicy or their subclasses), or a HybridPPO, PDQN or MPDQN model, got "
+            f"{type(model).__name__}"
         )
     return policy
 
@@ -160,12 +162,15 @@ def _features_header(policy: ExportablePolicy) -> dict[str, Any]:
 
 def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, Any] | None = None) -> Path:
     """
-    Write a trained SarsaAAC or HybridPPO policy as plain arrays and a JSON description (format ``sb3-aac-policy``:
-    version 3 for a ``networks`` head, a :class:`~sb3_aac.sarsa_aac.policies.DeepPolicy`'s or HybridPPO's, which older
-    readers cannot compute, else 2). HybridPPO's decisions are its ``mode()``: the most probable type and its mean
-    parameters (:mod:`sb3_aac.hppo.export`).
+    Write a trained SarsaAAC, HybridPPO, P-DQN or MP-DQN policy as plain arrays and a JSON description (format
+    ``sb3-aac-policy``: version 4 for P-DQN's ``pdqn`` head, 3 for a ``networks`` head, a
+    :class:`~sb3_aac.sarsa_aac.policies.DeepPolicy`'s or HybridPPO's, else 2: the oldest version that holds the policy,
+    since older readers cannot compute the newer heads). HybridPPO's decisions are its ``mode()``: the most probable
+    type and its mean parameters (:mod:`sb3_aac.hppo.export`); P-DQN's are ``predict(deterministic=True)``'s
+    (:mod:`sb3_aac.pdqn.export`).
 
-    :param model: a :class:`sb3_aac.SarsaAAC` or :class:`sb3_aac.HybridPPO` model, or its policy
+    :param model: a :class:`sb3_aac.SarsaAAC`, :class:`sb3_aac.HybridPPO`, :class:`sb3_aac.PDQN` or
+        :class:`sb3_aac.MPDQN` model, or its policy
     :param path: where to write; ``.aacp`` is appended when the name has no suffix (``RuntimePolicy.load`` accepts
         the same name)
     :param metadata: JSON-serialisable extras stored in the header (e.g. ``{"env_id": "RoboCupDribble-v0"}``)
@@ -174,17 +179,22 @@ def export_policy(model: Any, path: str | os.PathLike[str], metadata: dict[str, 
         leaves the earlier file (or none), never a part or a stray temporary.
     """
     from sb3_aac.hppo.policies import HybridActorCriticPolicy
+    from sb3_aac.pdqn.policies import PDQNPolicy
 
     path = Path(policy_file_path(path))
     meta = dict(metadata or {})
     num_timesteps = getattr(model, "num_timesteps", None)
     if num_timesteps is not None:
         meta.setdefault("num_timesteps", int(num_timesteps))
-    if isinstance(getattr(model, "policy", model), HybridActorCriticPolicy):
-        from sb3_aac.hppo.export import export_contents
+    torch_policy = getattr(model, "policy", model)
+    if isinstance(torch_policy, HybridActorCriticPolicy):
+        from sb3_aac.hppo import export as hppo_export
 
-        hybrid = getattr(model, "policy", model)
-        header, arrays = export_contents(hybrid, action_header(hybrid.spec), meta)
+        header, arrays = hppo_export.export_contents(torch_policy, action_header(torch_policy.spec), meta)
+    elif isinstance(torch_policy, PDQNPolicy):
+        from sb3_aac.pdqn import export as pdqn_export
+
+        header, arrays = pdqn_export.export_contents(torch_policy, action_header(torch_policy.spec), meta)
     else:
         policy = _policy_of(model)
         header, arrays = policy_header(policy, meta), policy_arrays(policy)

@@ -33,7 +33,6 @@ class Algo:
     kwargs: dict[str, Any] = field(default_factory=dict)  # small, fast settings for tests
     own_tags: tuple[str, ...] = ()  # the log keys of its own (besides tests/test_logging.py's COMMON_TAGS)
     log_often: dict[str, Any] = field(default_factory=dict)  # settings under which log_interval alone sets the dumps
-    exported: bool = False  # whether ``sb3-aac train --out`` also writes the policy as a .aacp file
     on_policy: bool = False  # whether it collects whole rollouts of n_steps per lane (kwargs' n_steps) between updates
     value_stats: str = "train/q"  # the prefix of its critic's value statistics (common.action_stats.ActionStats)
     # A hyperparameter that _setup_model turns into a schedule, and the value the model uses at the end of a learn:
@@ -96,7 +95,6 @@ ALGOS = [
             "sarsa_aac",
             own_tags=_SARSA_AAC_TAGS,
             log_often=dict(log_min_timesteps=0),
-            exported=True,
             value_stats="train/value",
         )
         for name in ("RbfPolicy", "MlpPolicy", "RbfMlpPolicy", "TilePolicy", "DeepPolicy")
@@ -109,7 +107,6 @@ ALGOS = [
         "hppo",
         HPPO_SMALL,
         _HPPO_TAGS,
-        exported=True,
         on_policy=True,
         value_stats="train/value",
         rebuilt=("clip_range", lambda model: model.clip_range_schedule(model._current_progress_remaining)),

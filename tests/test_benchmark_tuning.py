@@ -65,13 +65,15 @@ def journal_trials(path: Path, study_name: str) -> list[optuna.trial.FrozenTrial
 
 def test_the_plan_gives_every_learner_a_study_of_the_same_size():
     studies = plan_studies("full")
-    assert len(studies) == 9  # 3 headline learners x 3 envs
+    assert len(studies) == 31  # 4 headline learners x 2 dribbling envs, 5 on Platform, Moving, Sliding, 4 on Goal, CatchPoint
     for env_id in {s.env_id for s in studies}:
         sizes = {(s.trials, s.env_steps, s.seeds, s.evaluations, s.eval_episodes) for s in studies if s.env_id == env_id}
         assert len(sizes) == 1 and next(iter(sizes))[0] >= 20
     assert {s.name for s in plan_studies("full", 3, "platform__*")} == {
         "platform__SarsaAAC-tile",
+        "platform__SarsaAAC-deep",
         "platform__MPDQN",
+        "platform__HybridPPO",
         "platform__PPO",
     }
     assert TUNE_SEED > 9 and TUNE_EVAL_SEED not in (10_000, 20_000, 30_000)  # none of the grid's seeds or sets
@@ -286,7 +288,17 @@ def write_tuned_file(folder: Path, env_id: str, learner: str, params: dict) -> N
     (folder / env_id / f"{learner}.yml").write_text(yaml.safe_dump({**record, "params": params}))
 
 
-@pytest.mark.parametrize(("algo", "config"), [("TD3", "td3"), ("PPO", "ppo"), ("MPDQN", "mpdqn"), ("SarsaAAC", "tile")])
+@pytest.mark.parametrize(
+    ("algo", "config"),
+    [
+        ("TD3", "td3"),
+        ("PPO", "ppo"),
+        ("MPDQN", "mpdqn"),
+        ("HybridPPO", "hybridppo"),
+        ("SarsaAAC", "tile"),
+        ("SarsaAAC", "deep"),
+    ],
+)
 def test_a_tuned_cell_builds_its_learner_with_the_best_trials_settings(tmp_path, monkeypatch, algo, config):
     from benchmarks.execution import algo_config, build_model
     from benchmarks.tuned import learner_name

@@ -5,15 +5,17 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import robocup_dribble
 from benchmarks import cells as cell_files
+from benchmarks import domains
 from benchmarks import run as bench_run
 from benchmarks.adapters import DiscreteActionAdapter, FlatActionAdapter, baseline_env, env_action_space
-from benchmarks.presets import LONG_BUDGET, WALL_CLOCK_SECONDS, Cell, build_cells, is_tuned, select
+from benchmarks.presets import ENV_IDS, FULL, LONG_BUDGET, WALL_CLOCK_SECONDS, Cell, build_cells, is_tuned, select
 from benchmarks.report import build_report
 from benchmarks.significance import MIN_SEEDS
 from sb3_aac import DiscretizeParameterizedAction, FlattenParameterizedAction
@@ -82,17 +84,35 @@ def test_tiny_grid_writes_cells_models_and_tensorboard(tiny_run):
     assert len(results[cells[1].cell_id]["curve"]) > 2
 
 
-def test_eval_metrics_reach_tensorboard(tiny_run):
+def scalar_tags(folder):
     from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
-    out, cells, *_ = tiny_run
-    events = EventAccumulator(str(out / "tb" / cells[1].cell_id))
+    events = EventAccumulator(str(folder))
     events.Reload()
-    tags = set(events.Tags()["scalars"])
+    return events, set(events.Tags()["scalars"])
+
+
+def test_eval_metrics_reach_tensorboard(tiny_run):
+    out, cells, *_ = tiny_run
+    events, tags = scalar_tags(out / "tb" / cells[1].cell_id)
     assert {"eval/distance_mean", "eval/reach20_share", "eval/ball_loss_rate", "eval/final_distance_mean"} <= tags
     result = json.loads((out / "cells" / f"{cells[1].cell_id}.json").read_text())
     logged = [e.value for e in events.Scalars("eval/distance_mean")]
     assert np.allclose(logged, [p["distance_mean"] for p in result["curve"]], atol=1e-4)
+
+
+def test_sb3_baselines_log_the_env_metric_through_the_callback(tiny_run):
+    """The PPO and DQN cells (SB3's algorithms on the batched dribbling VecEnv) log rollout/ep_distance_mean and
+    rollout/ep_ball_lost_mean (benchmarks.execution adds EpisodeKeywordsCallback), at least wherever ep_rew_mean is."""
+    out, cells, *_ = tiny_run
+    for cell in cells[3:]:
+        events, tags = scalar_tags(out / "tb" / cell.cell_id)
+        assert {"rollout/ep_distance_mean", "rollout/ep_ball_lost_mean"} <= tags, cell.cell_id
+        distance_steps = {e.step for e in events.Scalars("rollout/ep_distance_mean")}
+        reward_steps = {e.step for e in events.Scalars("rollout/ep_rew_mean")} if "rollout/ep_rew_mean" in tags else set()
+        assert reward_steps <= distance_steps
+        assert all(0.0 <= e.value <= 1.0 for e in events.Scalars("rollout/ep_ball_lost_mean"))
+        assert all(np.isfinite(e.value) for e in events.Scalars("rollout/ep_distance_mean"))  # metres along +x
 
 
 def test_rerun_skips_finished_cells_without_rewriting_them(tiny_run):
@@ -226,18 +246,25 @@ def test_presets_are_well_formed():
         ids = [c.cell_id for c in cells]
         assert len(ids) == len(set(ids))
     assert {c.env_id for c in quick} == {ENV_ID}
-    assert {c.env_id for c in full} == {"RoboCupDribblePaper-v0", "RoboCupDribble-v0", "Platform-v0"}
-    assert {c.algo for c in full} >= {"SarsaAAC", "PDQN", "MPDQN", "PPO", "A2C", "SAC", "TD3", "DDPG", "DQN", "Reference"}
-    # the headline pairs have the seeds a verdict needs on every env; the paper's configs 5
-    for env_id in {c.env_id for c in full}:
-        for algo, config in (("SarsaAAC", "tile"), ("MPDQN", "mpdqn")):
+    assert {c.env_id for c in full} == set(ENV_IDS)  # the dribbling envs, Platform and the four hybrid domains
+    assert {c.algo for c in full} >= {
+        *("SarsaAAC", "PDQN", "MPDQN", "HybridPPO", "PPO", "A2C", "SAC", "TD3", "DDPG", "DQN", "Reference")
+    }
+    # everyone is on every env; the headline pairs have the seeds a verdict needs on every env; the paper's configs 5
+    for env_id in ENV_IDS:
+        assert {(c.algo, c.config) for c in full if c.env_id == env_id} >= {
+            *(("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn"), ("PDQN", "pdqn")),
+            *(("HybridPPO", "hybridppo"), ("TD3", "td3"), ("PPO", "ppo")),
+        }, env_id
+        for algo, config in (("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn")):
             assert len({c.seed for c in full if (c.env_id, c.algo, c.config) == (env_id, algo, config)}) >= MIN_SEEDS
     assert min(len({c.seed for c in full if c.config == k}) for k in ("rbf50", "mlp2", "rbfmlp2")) >= 5
     # every learner of an env's main view gets the same env-step budget, and has a tuned twin
     for env_id in {c.env_id for c in full}:
         trained = [c for c in full if c.algo != "Reference" and c.env_id == env_id and not c.seconds]
         main = min(c.budget for c in trained)
-        assert {c.budget for c in trained} <= {main, LONG_BUDGET}
+        assert main == FULL["envs"][env_id]["budget"]
+        assert {c.budget for c in trained} <= {main, FULL["envs"][env_id].get("long", {}).get("budget")}
         at_main = [c for c in trained if c.budget == main]
         headline = {(c.algo, c.config) for c in at_main if len({d.seed for d in at_main if d.config == c.config}) >= 10}
         assert {(c.algo, c.config.removesuffix("-tuned")) for c in trained if is_tuned(c.config)} <= headline
@@ -256,7 +283,10 @@ def test_presets_are_well_formed():
 
 
 def synthetic_scores(env_id: str, d: float) -> dict:
-    if env_id == "Platform-v0":
+    """A summary with score ``d`` in the env's metric (the other episodic keys follow from it)."""
+    if domains.metric(env_id) == "success_share":
+        return {"return_mean": 50 * d - 10, "return_median": 50 * d - 10, "success_share": d}
+    if not domains.is_dribbling(env_id):
         return {"return_mean": d, "return_median": d, "success_share": float(d > 0.99)}
     return {
         "distance_mean": d,
@@ -267,11 +297,16 @@ def synthetic_scores(env_id: str, d: float) -> dict:
     }
 
 
-def synthetic_cell(env_id: str, algo: str, config: str, seed: int, final: float, family: str) -> dict:
+def synthetic_cell(
+    env_id: str, algo: str, config: str, seed: int, final: float, family: str, algo_config: dict | None = None
+) -> dict:
+    """A finished cell's file whose learning curve rises from ``start`` (0, or -1 for Moving-like returns) to about
+    ``final``, seeds spread a little; ``algo_config`` as recorded (default: a stand-in)."""
     rate = {"rbf10": 0.004, "mlp2": 0.001}.get(config, 0.0005)
     episodes = np.arange(0, 12_001, 500)
-    spread = 0.3 if env_id != "Platform-v0" else 0.003
-    distances = final * (1 - np.exp(-rate * episodes)) + spread * seed
+    spread = 0.3 if domains.is_dribbling(env_id) else 0.003
+    start = -1.0 if env_id in ("Moving-v0", "Sliding-v0") else 0.0
+    distances = start + (final - start) * (1 - np.exp(-rate * episodes)) + spread * seed
     curve = [
         {
             "episodes": int(e),
@@ -288,7 +323,8 @@ def synthetic_cell(env_id: str, algo: str, config: str, seed: int, final: float,
         "cell": cell.to_dict(),
         "family": family,
         "command": "python -m benchmarks.run --preset full",
-        "algo_config": {
+        "algo_config": algo_config
+        or {
             "SarsaAAC": {},
             "MPDQN": {"kwargs": {}, "other": "hyperparams/mpdqn.yml"},
         }.get(algo, {"n_envs": 8, "wrapper": "flatten", "kwargs": {}}),
@@ -391,6 +427,89 @@ def test_report_from_synthetic_cells(tmp_path):
     assert "not reached" in text  # MLP never reaches 20 m
     for name in ("fig_mlp.png", "fig_rbf.png", "fig_best.png", "fig_final.png", "fig_reliability.png"):
         assert (tmp_path / name).stat().st_size > 10_000, name
+
+
+def test_report_covers_the_new_learners_and_domains(tmp_path):
+    """DeepPolicy and HybridPPO cells, Goal (ranked by P(goal)) and Moving (returns that start below 0): their tables,
+    published figures, verdicts and figures; each cell's settings as the runner records them."""
+    from benchmarks.execution import algo_config
+
+    def cells(env_id: str, algo: str, config: str, final: float, family: str, seeds: int = 10) -> list[dict]:
+        recorded = algo_config(Cell(env_id, algo, config, 0, 100_000))
+        return [synthetic_cell(env_id, algo, config, s, final, family, recorded) for s in range(seeds)]
+
+    results = [
+        *cells("Goal-v0", "SarsaAAC", "tile", 0.60, "Tiles"),
+        *cells("Goal-v0", "SarsaAAC", "deep", 0.75, "Deep"),
+        *cells("Goal-v0", "MPDQN", "mpdqn", 0.70, "peer"),
+        *cells("Goal-v0", "HybridPPO", "hybridppo", 0.20, "peer", seeds=3),
+        *cells("Goal-v0", "TD3", "td3", 0.30, "baseline"),
+        *cells("Moving-v0", "SarsaAAC", "tile", 1.20, "Tiles"),
+        *cells("Moving-v0", "SarsaAAC", "deep", 1.00, "Deep"),
+        *cells("Moving-v0", "MPDQN", "mpdqn", 0.80, "peer"),
+        *cells("Moving-v0", "HybridPPO", "hybridppo", 1.60, "peer"),
+        *cells("Moving-v0", "PPO", "ppo", 1.10, "baseline"),
+    ]
+    (tmp_path / "cells").mkdir()
+    for r in results:
+        (tmp_path / "cells" / f"{r['cell_id']}.json").write_text(json.dumps(r))
+    text = build_report(tmp_path).read_text()
+    for needle in (
+        "### Goal-v0 (Masson et al.'s Robot Soccer Goal, hybrid_domains)",
+        "### Moving-v0 (gym-hybrid's Moving, hybrid_domains)",
+        "final P(goal), IQM [95% CI]",
+        "final mean return, IQM [95% CI]",
+        "DeepPolicy",
+        "*MP-DQN, published* | - | - | - | 0.789",
+        "*H-PPO, published* | - | - | - | 1.700",
+        "episodes to 0.7",
+        "episodes to 1.5",
+        "HybridPPO (Moving-v0): hyperparams/hppo.yml (Platform-v0; no entry for Moving-v0)",
+        "MPDQN (Goal-v0): hyperparams/mpdqn.yml (Goal-v0, the reference code's initial parameter policy)",
+        "MPDQN (Moving-v0): MPDQN defaults (no entry for Moving-v0 in hyperparams/mpdqn.yml)",
+        "SarsaAAC** runs with its defaults on 16 lanes",
+    ):
+        assert needle in text, needle
+    assert "Bester" in text and "0.987" not in text  # no Platform figures without Platform cells
+    goal = text[text.index("- **Goal-v0**") :].split("\n- **")[0]
+    assert "best SarsaAAC config, DeepPolicy" in goal
+    assert "vs the best parameterized peer, MPDQN" in goal and "**SarsaAAC deep better**" in goal
+    assert "against MP-DQN's published 0.789" in goal
+    moving = text[text.index("- **Moving-v0**") :].split("\n- **")[0]
+    assert "vs the best parameterized peer, HybridPPO" in moving and "**HybridPPO better**" in moving
+    assert "against H-PPO's published 1.7" in moving
+    for name in ("fig_best.png", "fig_final.png"):
+        assert (tmp_path / name).stat().st_size > 10_000, name
+
+
+def test_the_peers_take_their_yml_entry_or_the_stated_fallback():
+    """MP-DQN on Goal: the reference settings, env (features, reward scale) and start; HybridPPO on Moving: hppo.yml's
+    Platform entry (the rule of all its entries) on the domain's env; MP-DQN on Moving: its defaults."""
+    from benchmarks.execution import build_model
+    from benchmarks.reference_init import PassthroughPolicy
+    from hybrid_domains.reference_inputs import ScaleReward
+
+    goal, _, _ = build_model(Cell("Goal-v0", "MPDQN", "mpdqn", 0, 1000))
+    assert isinstance(goal.policy, PassthroughPolicy) and goal.gamma == 0.95 and goal.gradient_steps == 4
+    lane = goal.get_env().envs[0]
+    while not isinstance(lane, ScaleReward):
+        lane = lane.env
+    assert lane.scale == 0.02
+    assert goal.observation_space == domains.episodic_env("Goal-v0").observation_space  # scored on what it saw
+    hppo, _, _ = build_model(Cell("Moving-v0", "HybridPPO", "hybridppo", 0, 1000))
+    assert (hppo.n_envs, hppo.n_steps, hppo.batch_size, hppo.ent_coef) == (8, 256, 256, 0.01)
+    assert hppo.observation_space == domains.episodic_env("Moving-v0").observation_space
+    moving, _, _ = build_model(Cell("Moving-v0", "MPDQN", "mpdqn", 0, 1000))
+    assert (moving.gamma, moving.learning_starts, moving.buffer_size) == (0.99, 500, 100_000)  # MPDQN's defaults
+
+
+def test_the_finished_cells_of_the_results_are_cells_of_the_full_preset():
+    """Adding learners and domains keeps every finished cell's id and definition: a rerun skips them."""
+    out = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    files = sorted((out / "cells").glob("*.json"))
+    full = {cell.cell_id: cell for cell in build_cells("full")}
+    assert files and all(path.stem in full for path in files)
+    assert all(cell_files.is_finished(out, full[path.stem]) for path in files)
 
 
 def test_the_quick_preset_runs_and_reports(tmp_path):

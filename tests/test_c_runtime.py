@@ -30,6 +30,7 @@ from sb3_aac.runtime.c import header_path
 from tests.helpers import LAYOUTS, POLICIES
 from tests.test_export import header_only_file, observations, randomised_model, rewrite
 from tests.test_file_properties import CUTS, FLIPS, JSON_VALUES, SECTIONS, damaged
+from tests.test_pdqn_export import ALGORITHMS, randomised_pdqn
 
 ROOT = Path(__file__).resolve().parents[1]
 DRIVER = ROOT / "tests" / "c_runtime" / "aacp_check.c"
@@ -85,7 +86,8 @@ def builds(drivers: dict[str, Path | str]) -> list[Path]:
 
 
 def policy_kinds() -> dict[str, tuple[str, str, dict]]:
-    """Every policy kind under every layout (as tests/test_export.py exports them), plus the RBF window at work."""
+    """Every policy kind under every layout (as tests/test_export.py exports them), plus the RBF window at work, and
+    P-DQN / MP-DQN under every layout (as tests/test_pdqn_export.py exports them) and with tanh-bounded parameters."""
     kinds = {}
     for policy in POLICIES:
         for layout in LAYOUTS:
@@ -99,6 +101,10 @@ def policy_kinds() -> dict[str, tuple[str, str, dict]]:
     # 50 RBFs per input: the window keeps about 11 of them
     kinds["RbfPolicy-window"] = ("RbfPolicy", "nested", {"n_rbf": 50})
     kinds["RbfMlpPolicy-window"] = ("RbfMlpPolicy", "flat", {"n_rbf": 30, "hidden_units": 3})
+    for algorithm in ALGORITHMS:
+        for layout in LAYOUTS:
+            kinds[f"{algorithm}-{layout}"] = (algorithm, layout, {"net_arch": [16, 16]})
+        kinds[f"{algorithm}-tanh"] = (algorithm, "shared", {"net_arch": [8], "param_bounding": "tanh"})
     return kinds
 
 
@@ -110,8 +116,10 @@ def policy_files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Pa
     folder = tmp_path_factory.mktemp("policies")
     files = {}
     for name, (policy, layout, kwargs) in KINDS.items():
-        model = randomised_model(policy, layout, **kwargs)
-        files[name] = (export_policy(model, folder / name), observations(model, N_OBS))
+        model = (
+            randomised_pdqn(policy, layout, **kwargs) if policy in ALGORITHMS else randomised_model(policy, layout, **kwargs)
+        )
+        files[name] = (export_policy(model, folder / name), observations(model, N_OBS))  # type: ignore[arg-type]
     return files
 
 
@@ -269,7 +277,7 @@ def explicit_cases(good: Path, tiles: Path) -> list[tuple[str, bytes, str | None
 
         return change
 
-    edit("version 4", set_in("version", value=4), "unknown format version 4")
+    edit("version 5", set_in("version", value=5), "unknown format version 5")
     edit("format other", set_in("format", value="other"), "format")
     edit("version 1", set_in("version", value=1), "unknown format version 1")
     edit("version 2.0", set_in("version", value=2.0), None)  # Python: 2.0 == 2
@@ -385,6 +393,55 @@ def network_cases(folder: Path) -> list[tuple[str, bytes, str | None]]:
         h["approximators"]["features"] = {"type": "rbf", "n_rbf": 2, "rbf_window": 5.0, "n_features": 2 * d}
 
     edit("rbf features", rbf_features, "scaled features")
+    return cases + pdqn_cases(folder)
+
+
+def pdqn_cases(folder: Path) -> list[tuple[str, bytes, str | None]]:
+    """Damaged pdqn heads (version 4) and damaged P-DQN / MP-DQN files."""
+    from sb3_aac.common.envs import ParameterizedTargetEnv
+
+    files = {}
+    for name, algorithm in ALGORITHMS.items():
+        model = algorithm("MlpPolicy", ParameterizedTargetEnv(n_types=3), seed=0, policy_kwargs={"net_arch": [8, 8]})
+        files[name] = export_policy(model, folder / f"{name}.aacp")
+    mpdqn = files["MPDQN"]
+    data = mpdqn.read_bytes()
+    cases: list[tuple[str, bytes, str | None]] = [(name, path.read_bytes(), None) for name, path in files.items()]
+    cases += [(f"pdqn cut {cut}", data[:cut], "truncated|checksum") for cut in (100, len(data) // 2, -33, -1)]
+    altered = bytearray(data)
+    altered[len(data) // 2] ^= 0x10
+    cases.append(("pdqn byte", bytes(altered), "checksum"))
+
+    def edit(label: str, change, pattern: str | None, arrays=None, path: Path = mpdqn) -> None:
+        cases.append((label, rewrite(path, change, arrays), pattern))
+
+    def head(**fields):
+        return lambda h: h["approximators"]["head"].update(fields)
+
+    def networks(change):
+        return lambda h: change(h["approximators"]["head"]["networks"])
+
+    edit("pdqn version 3", lambda h: h.update(version=3), "version >= 4")
+    edit("pdqn version 4.0", lambda h: h.update(version=4.0), None)
+    edit("multi_pass 1", head(multi_pass=1), "multi_pass")
+    edit("multi_pass null", head(multi_pass=None), "multi_pass")
+    edit("no multi_pass", lambda h: h["approximators"]["head"].pop("multi_pass"), "lacks")
+    edit("single pass", head(multi_pass=False), None)
+    edit("networks head", head(type="networks"), "exactly once|in=")
+    edit("three networks", networks(lambda n: n.append(n[0])), "two networks")
+    edit("swapped", networks(lambda n: n.reverse()), "in=|columns")
+    edit("q reads D", networks(lambda n: n[1]["layers"][0].update({"in": 2})), "in=")
+    edit("actor columns", networks(lambda n: n[0].update(columns=[0, 3])), "columns")
+    edit("pdqn NaN", None, "NaN", lambda a: a["net1_0_weight"].__setitem__((0, 0), np.nan))
+    edit("pdqn inf bias", None, "NaN or inf", lambda a: a["net0_4_bias"].__setitem__(0, np.inf))
+    edit("pdqn no weight", None, "missing array 'net1_2_weight'", lambda a: a.pop("net1_2_weight"))
+    edit("pdqn shape", None, "shape", lambda a: a.update(net1_0_bias=np.zeros(3)))
+
+    def rbf_features(h):
+        d = h["observation"]["size"]
+        h["approximators"]["features"] = {"type": "rbf", "n_rbf": 2, "rbf_window": 5.0, "n_features": 2 * d}
+
+    edit("pdqn rbf", rbf_features, "scaled features")
     return cases
 
 

@@ -65,7 +65,7 @@ def test_train_every_algorithm(tmp_path: Path, capsys, case) -> None:
     out = capsys.readouterr().out
     name = case.algo.__name__
     assert f"training {name} {case.policy}" in out and "greedy evaluation over 3 episodes: return" in out
-    assert (tmp_path / "policy.aacp").exists() == case.exported  # the .aacp format carries SarsaAAC's and HybridPPO's
+    assert (tmp_path / "policy.aacp").exists()
     run = json.loads((tmp_path / "run.json").read_text())
     assert run["algo"] == case.cli and run["policy"] == case.policy
     assert list((tmp_path / "tb").glob(f"{name}_{case.policy}_1/events.out.tfevents.*"))

@@ -302,8 +302,8 @@ def test_trailing_garbage_and_pickle(good_file: Path, tmp_dir: Path) -> None:
 
 
 def test_unknown_version_and_format(good_file: Path, tmp_dir: Path) -> None:
-    with pytest.raises(ValueError, match="unknown format version 4"):
-        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(version=4)))
+    with pytest.raises(ValueError, match="unknown format version 5"):
+        load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(version=5)))
     with pytest.raises(ValueError, match="format"):
         load_bytes(tmp_dir, rewrite(good_file, lambda h: h.update(format="other")))
 
@@ -516,7 +516,7 @@ def test_only_version_2_is_read_and_rbf_features_name_their_window(good_file: Pa
     def no_window(h):
         del h["approximators"]["features"]["rbf_window"]
 
-    with pytest.raises(ValueError, match=r"unknown format version 1; this reader supports versions \[2, 3\]"):
+    with pytest.raises(ValueError, match=r"unknown format version 1; this reader supports versions \[2, 3, 4\]"):
         load_bytes(tmp_dir, rewrite(good_file, version_1))
     with pytest.raises(ValueError, match=r"lacks or mistypes a required field.*rbf_window"):
         load_bytes(tmp_dir, rewrite(good_file, no_window))

@@ -132,11 +132,10 @@ def test_an_empty_batch_is_one_clear_error_everywhere(case, tmp_path) -> None:
     for deterministic in (True, False):
         with pytest.raises(ValueError, match=r"empty batch of shape \(0, 2\)"):
             model.predict(empty, deterministic=deterministic)
-    if case.exported:
-        runtime = RuntimePolicy.load(export_policy(model, tmp_path / "policy.aacp"))
-        for call in (runtime.act_batch, runtime.predict, runtime.outputs):
-            with pytest.raises(ValueError, match=r"empty batch of shape \(0, 2\)"):
-                call(empty)
+    runtime = RuntimePolicy.load(export_policy(model, tmp_path / "policy.aacp"))
+    for call in (runtime.act_batch, runtime.predict, runtime.outputs):
+        with pytest.raises(ValueError, match=r"empty batch of shape \(0, 2\)"):
+            call(empty)
 
 
 def test_one_runtime_policy_shared_by_threads_decides_as_alone(tmp_path) -> None:

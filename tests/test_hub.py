@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from huggingface_hub import ModelCard
+from torch.nn import GELU
 
 from robocup_dribble import DribbleVecEnv
 from sb3_aac import MPDQN, RuntimePolicy, SarsaAAC
@@ -39,6 +40,9 @@ def models(tmp_path_factory) -> dict[str, Path]:
     for name, model in {
         "tile": SarsaAAC("TilePolicy", DribbleVecEnv(2, profile="v11"), seed=0),
         "mpdqn": MPDQN("MlpPolicy", DribbleVecEnv(2, profile="v19"), seed=0, learning_starts=20),
+        "mpdqn-gelu": MPDQN(  # a network the format cannot carry
+            "MlpPolicy", DribbleVecEnv(2, profile="v19"), seed=0, learning_starts=20, policy_kwargs={"activation_fn": GELU}
+        ),
     }.items():
         model.learn(300)
         paths[name] = folder / f"{name}.zip"
@@ -77,11 +81,13 @@ def test_push_uploads_the_model_its_policy_and_a_card(models, hub, tmp_path, cap
 
 
 def test_push_of_a_model_export_cannot_carry_leaves_the_policy_out(models, hub) -> None:
-    assert main(["push", str(models["mpdqn"]), "--repo-id", "me/mpdqn", "--episodes", "5"]) == 0
+    assert main(["push", str(models["mpdqn-gelu"]), "--repo-id", "me/mpdqn", "--episodes", "5", "--trust"]) == 0
     assert set(hub.uploaded) == {"model.zip", "results.json", "README.md"}
     card = ModelCard(hub.uploaded["README.md"].decode())
     assert "MPDQN.load" in card.text and "RuntimePolicy" not in card.text
     assert json.loads(hub.uploaded["results.json"])["env_id"] == "RoboCupDribble-v0"
+    assert main(["push", str(models["mpdqn"]), "--repo-id", "me/mpdqn", "--episodes", "5"]) == 0
+    assert set(hub.uploaded) == {"model.zip", "policy.aacp", "results.json", "README.md"}
 
 
 def test_dry_run_writes_the_folder_and_uploads_nothing(models, hub, tmp_path, capsys) -> None:

@@ -36,16 +36,33 @@ def test_errors(capsys, argv: list[str], message: str) -> None:
     assert re.search(message, run_error(capsys, argv))
 
 
-def test_export_of_a_pdqn_model_is_one_line(tmp_path, capsys) -> None:
-    from robocup_dribble import DribbleVecEnv
-    from sb3_aac import MPDQN
+@pytest.mark.parametrize("algo", ["PDQN", "MPDQN"])
+def test_export_of_a_pdqn_model(tmp_path, capsys, algo: str) -> None:
+    """``sb3-aac export`` writes P-DQN / MP-DQN models (format version 4) that decide as predict, exit 0; a model the
+    format cannot carry (a GELU network) is one line and exit 2, writing nothing."""
+    import numpy as np
+    import torch as th
 
-    model = MPDQN("MlpPolicy", DribbleVecEnv(2, profile="v19"), seed=0, learning_starts=20)
+    import sb3_aac
+    from robocup_dribble import DribbleVecEnv
+    from sb3_aac import RuntimePolicy
+
+    model = getattr(sb3_aac, algo)("MlpPolicy", DribbleVecEnv(2, profile="v19"), seed=0, learning_starts=20)
     model.learn(40)
     model.save(tmp_path / "model.zip")
+    assert main(["export", str(tmp_path / "model.zip"), str(tmp_path / "policy.aacp")]) == 0
+    assert "wrote" in capsys.readouterr().out
+    runtime = RuntimePolicy.load(tmp_path / "policy.aacp")
+    assert runtime.header["version"] == 4 and runtime.header["metadata"]["env_id"] == "RoboCupDribble-v0"
+    obs = np.random.default_rng(0).uniform(-1, 1, (200, *model.observation_space.shape)).astype(np.float32)
+    types = [a[0] for a in model.predict(obs, deterministic=True)[0]]
+    np.testing.assert_array_equal(runtime.act_batch(obs)[0], types)
+
+    gelu = getattr(sb3_aac, algo)("MlpPolicy", DribbleVecEnv(2, profile="v19"), policy_kwargs={"activation_fn": th.nn.GELU})
+    gelu.save(tmp_path / "gelu.zip")
     with pytest.raises(SystemExit) as info:
-        main(["export", str(tmp_path / "model.zip"), str(tmp_path / "policy.aacp")])
+        main(["export", str(tmp_path / "gelu.zip"), str(tmp_path / "gelu.aacp"), "--trust"])
     assert info.value.code == 2
     err = capsys.readouterr().err
-    assert "cannot export" in err and "MPDQN" in err and "Traceback" not in err
-    assert not (tmp_path / "policy.aacp").exists()
+    assert "cannot export" in err and "GELU" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "gelu.aacp").exists()

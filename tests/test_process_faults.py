@@ -3,6 +3,7 @@ leaves a half-written file (Linux: processes are found through /proc)."""
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -98,6 +99,147 @@ def test_killed_runner_leaves_no_process_and_no_half_written_file(tmp_path: Path
     driver.wait(30)
     assert not wait_gone(seen, 30.0), "processes outlived the killed runner"  # a worker may still be importing
     check_no_half_written_file(tmp_path)
+
+
+# ------------------------------------------------------------------------------------------ the Ray engine's watchdog
+
+# A process that ignores SIGTERM and holds the file named by its argument open.
+SLEEPER = "import signal, sys, time; signal.signal(signal.SIGTERM, signal.SIG_IGN); f = open(sys.argv[1], 'w'); time.sleep(99)"
+REAPER_DRIVER = """
+import subprocess, sys
+from benchmarks.process_reaper import ProcessReaper
+folder, then = sys.argv[1], sys.argv[2]
+sleeper = lambda name: subprocess.Popen([sys.executable, "-c", {sleeper!r}, folder + "/" + name], stdout=subprocess.DEVNULL)
+before = sleeper("before")  # started before the watchdog: not the block's
+with ProcessReaper() as reaper:
+    reaper.claim(folder)
+    inside = sleeper("inside")  # ignores SIGTERM
+    print(before.pid, inside.pid, reaper.pid, flush=True)
+    sys.stdin.readline()
+    if then == "die":
+        import os, signal
+        os.kill(os.getpid(), signal.SIGKILL)
+print("left the block", flush=True)
+sys.stdin.readline()
+"""
+
+
+def start_reaper_driver(tmp_path: Path, then: str) -> tuple[subprocess.Popen[str], list[int]]:
+    script = REAPER_DRIVER.format(sleeper=SLEEPER)
+    driver = subprocess.Popen([sys.executable, "-c", script, str(tmp_path), then], env=ENV, cwd=ROOT, text=True,
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE)  # fmt: skip
+    assert driver.stdout is not None
+    pids = [int(word) for word in driver.stdout.readline().split()]
+    deadline = time.monotonic() + 60
+    while not all((tmp_path / name).exists() for name in ("before", "inside")) and time.monotonic() < deadline:
+        time.sleep(0.05)  # both sleepers run (and ignore SIGTERM)
+    return driver, pids
+
+
+def test_the_watchdog_ends_what_a_killed_driver_started_and_nothing_else(tmp_path: Path) -> None:
+    pytest.importorskip("psutil", reason="the watchdog needs psutil (pip install sb3-aac[distributed])")
+    from benchmarks.process_reaper import GRACE_SECONDS
+
+    driver, (before, inside, watchdog) = start_reaper_driver(tmp_path, "die")
+    try:
+        driver.communicate("\n", timeout=30)  # it kills itself inside the block
+        assert driver.returncode == -signal.SIGKILL
+        assert not wait_gone({inside, watchdog}, GRACE_SECONDS + 10)  # SIGTERM ignored: SIGKILL after the grace
+        assert alive({before})  # started before the block
+    finally:
+        os.kill(before, signal.SIGKILL)
+        for pid in (inside, watchdog):
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+
+
+def test_the_watchdog_leaves_alone_what_a_driver_that_cleaned_up_left_running(tmp_path: Path) -> None:
+    pytest.importorskip("psutil", reason="the watchdog needs psutil (pip install sb3-aac[distributed])")
+    driver, (before, inside, watchdog) = start_reaper_driver(tmp_path, "stay")
+    try:
+        assert driver.stdin is not None and driver.stdout is not None
+        driver.stdin.write("\n")
+        driver.stdin.flush()
+        assert driver.stdout.readline() == "left the block\n"
+        assert not wait_gone({watchdog}, 10)  # STOP: the watchdog exits with the block ...
+        driver.kill()
+        driver.wait(30)
+        time.sleep(1)
+        assert alive({before, inside}) == {before, inside}  # ... and kills nothing, not even after the driver's end
+    finally:
+        for pid in (before, inside):
+            os.kill(pid, signal.SIGKILL)
+
+
+def test_the_processes_using_a_claimed_directory(tmp_path: Path) -> None:
+    pytest.importorskip("psutil", reason="the watchdog needs psutil (pip install sb3-aac[distributed])")
+    from benchmarks.process_reaper import users_of
+
+    claimed, other = tmp_path / "claimed", tmp_path / "other"
+    claimed.mkdir()
+    other.mkdir()
+    started = time.time() - 1
+    holding = subprocess.Popen([sys.executable, "-c", SLEEPER, str(claimed / "log")])
+    naming = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(120)", f"--session={claimed}/sockets"])
+    elsewhere = subprocess.Popen([sys.executable, "-c", SLEEPER, str(other / "log")])
+    try:
+        deadline = time.monotonic() + 60
+        while not ((claimed / "log").exists() and (other / "log").exists()) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        found = {p.pid for p in users_of([str(claimed)], started, skip=os.getpid())}
+        assert {holding.pid, naming.pid} <= found and elsewhere.pid not in found
+        assert not users_of([str(claimed)], time.time() + 60, skip=os.getpid())  # none started since then
+    finally:
+        for process in (holding, naming, elsewhere):
+            process.kill()
+            process.wait()
+
+
+def command_line(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+    except (FileNotFoundError, ProcessLookupError):
+        return ""
+
+
+RAY_AGENTS = ("ray::DashboardAgent", "ray::RuntimeEnvAgent")  # the raylet's children that outlived a killed runner
+RAY_GONE_SECONDS = 15.0  # the reaper's grace (2 s) after the runner's pipe closes, and room for a loaded machine
+
+
+@pytest.mark.slow
+def test_a_killed_ray_runner_leaves_no_process_of_its_ray_instance(tmp_path: Path) -> None:
+    """``--engine ray`` without ``--address`` starts Ray here; SIGKILL the runner once the raylet's agents run. Within
+    RAY_GONE_SECONDS no process of that Ray instance is left: none of the runner's descendants (its watchdog, GCS,
+    raylet, agents, workers), and no process naming the instance's session directory (``session_..._<runner pid>``)."""
+    pytest.importorskip("ray", reason="Ray is not installed (pip install sb3-aac[distributed])")
+    pytest.importorskip("psutil", reason="the Ray engine's watchdog needs psutil (pip install sb3-aac[distributed])")
+    from benchmarks.process_reaper import POLL_MAX_SECONDS
+
+    argv = ["--preset", "quick", "--only", "paper__SarsaAAC-tile__s0__20k", "--engine", "ray", "--workers", "1"]
+    runner = subprocess.Popen(
+        [sys.executable, "-m", "benchmarks.run", *argv, "--allow-dirty", "--out", str(tmp_path)],
+        env=ENV, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    deadline = time.monotonic() + 180  # imports and Ray's start take seconds, more on a loaded machine
+    seen: set[int] = set()
+    agents: set[int] = set()
+    try:
+        while len(agents) < len(RAY_AGENTS) and time.monotonic() < deadline and runner.poll() is None:
+            seen |= descendants(runner.pid)
+            agents = {pid for pid in seen if command_line(pid).startswith(RAY_AGENTS)}
+            time.sleep(0.1)
+        assert len(agents) == len(RAY_AGENTS), f"the Ray agents did not start (runner exit {runner.poll()})"
+        time.sleep(2 * POLL_MAX_SECONDS)  # the watchdog has noted them
+        seen |= descendants(runner.pid)
+        session = next(match[0] for pid in seen if (match := re.search(r"session_[0-9_-]+", command_line(pid))))
+    finally:
+        runner.kill()
+        runner.wait(30)
+    assert session.endswith(f"_{runner.pid}")
+    left = wait_gone(seen, RAY_GONE_SECONDS)
+    assert not left, f"outlived the killed runner: {[command_line(pid) for pid in left]}"
+    named = {int(e.name) for e in Path("/proc").iterdir() if e.name.isdigit() and session in command_line(int(e.name))}
+    assert not alive(named), f"processes of {session} left: {[command_line(pid) for pid in alive(named)]}"
 
 
 def test_a_damaged_cell_file_is_recomputed_and_named(tmp_path: Path) -> None:

@@ -3,11 +3,12 @@ Nanoseconds per greedy decision in C (``sb3_aac/runtime/c/aacp.h``, timed by ``b
 :meth:`sb3_aac.RuntimePolicy.act` (numba and numpy-only) in the same run, for each policy kind; and how closely the C
 decisions follow ``RuntimePolicy.act`` (type mismatches, largest parameter difference).
 
-Every SarsaAAC policy is trained briefly on ``RoboCupDribblePaper-v0`` (the weights' values do not change the cost),
-exported, and run on the same observations (uniform over the observation space widened by 20% on each side, as
-tests/test_c_runtime.py draws them). The C timer is compiled here with the machine's ``cc`` (``--cflags``, default
-``-O2``); each C figure is the best of ``--repeats`` runs of ``--calls`` decisions cycling through the observations
-(CPU time), each Python figure the best of ``--repeats`` timeit runs; report the load average with the numbers.
+Every SarsaAAC policy, and P-DQN / MP-DQN (``"PDQN"``, ``"MPDQN"`` in the policy column), is trained briefly on
+``RoboCupDribblePaper-v0`` (the weights' values do not change the cost), exported, and run on the same observations
+(uniform over the observation space widened by 20% on each side, as tests/test_c_runtime.py draws them). The C timer
+is compiled here with the machine's ``cc`` (``--cflags``, default ``-O2``); each C figure is the best of
+``--repeats`` runs of ``--calls`` decisions cycling through the observations (CPU time), each Python figure the best
+of ``--repeats`` timeit runs; report the load average with the numbers.
 
 Usage: ``python -m benchmarks.speed.c_runtime_speed [--quick] [--calls 200000] [--repeats 5] [--cflags "-O2"]``
 
@@ -29,9 +30,9 @@ import numpy as np
 
 import robocup_dribble
 from benchmarks.speed.timing import load_average, microseconds
-from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
+from benchmarks.speed.runtime_speed import trained_model
+from sb3_aac import RuntimePolicy, export_policy
 from sb3_aac.runtime.c import header_path
-from sb3_aac.runtime.format import SUPPORTED_VERSIONS
 
 ENV_PROFILE = "v11"  # the paper's env, RoboCupDribblePaper-v0
 TIMER = Path(__file__).resolve().parent / "c" / "aacp_speed.c"
@@ -44,10 +45,12 @@ CONFIGS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("MlpPolicy", {}),
     ("RbfMlpPolicy", {}),
     ("TilePolicy", {}),
+    ("DeepPolicy", {}),
+    ("PDQN", {}),
+    ("MPDQN", {}),
+    ("MPDQN", {"net_arch": [64, 64]}),
 )
-if 3 in SUPPORTED_VERSIONS:  # the networks head (format version 3): DeepPolicy
-    CONFIGS = (*CONFIGS, ("DeepPolicy", {}))
-QUICK_CONFIGS = (CONFIGS[0], CONFIGS[2], CONFIGS[5], *CONFIGS[6:])
+QUICK_CONFIGS = (CONFIGS[0], CONFIGS[2], CONFIGS[5], *CONFIGS[6:10])
 
 
 def build_timer(folder: Path, cflags: list[str]) -> Path:
@@ -98,7 +101,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--quick", action="store_true", help="fewer policies, calls and training steps (seconds)")
     parser.add_argument("--calls", type=int, default=200_000, help="C decisions per timing run")
     parser.add_argument("--repeats", type=int, default=5, help="timing runs per figure (the best is reported)")
-    parser.add_argument("--train-steps", type=int, default=2000, help="SarsaAAC training steps before export")
+    parser.add_argument("--train-steps", type=int, default=2000, help="training steps before export")
     parser.add_argument("--cflags", default="-O2", help="flags the C timer is compiled with (default: %(default)s)")
     args = parser.parse_args(argv)
     if args.quick:
@@ -116,9 +119,7 @@ def main(argv: list[str] | None = None) -> None:
         timer = build_timer(folder, shlex.split(args.cflags))
         obs.tofile(folder / "timing.bin")
         for policy_name, kwargs in QUICK_CONFIGS if args.quick else CONFIGS:
-            env = robocup_dribble.DribbleVecEnv(8, profile=ENV_PROFILE)
-            env.seed(0)
-            model = SarsaAAC(policy_name, env, seed=0, policy_kwargs=kwargs).learn(args.train_steps)
+            model = trained_model(policy_name, args.train_steps, **kwargs)
             path = export_policy(model, folder / "policy.aacp")
             timed = subprocess.run(
                 [str(timer), str(path), str(folder / "timing.bin"), str(args.calls), str(args.repeats)],

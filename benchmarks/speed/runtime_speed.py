@@ -1,10 +1,10 @@
 """
 Microseconds per greedy decision on one observation: an exported policy (:class:`sb3_aac.RuntimePolicy`) next to
-``SarsaAAC.predict`` and SB3's ``DQN.predict``, in the same run; and how the exported policy's cost grows with the
+the model's ``predict`` and SB3's ``DQN.predict``, in the same run; and how the exported policy's cost grows with the
 number of RBFs (the paper's O(n), Uc-Cetina 2013 Sec. 4.3).
 
-Every SarsaAAC policy is trained briefly on ``RoboCupDribblePaper-v0`` (the weights' values do not change the
-cost), exported, and loaded twice: with the numba backend (``"auto"`` when numba is installed) and with the
+Every SarsaAAC policy, and P-DQN / MP-DQN, is trained briefly on ``RoboCupDribblePaper-v0`` (the weights' values do
+not change the cost), exported, and loaded twice: with the numba backend (``"auto"`` when numba is installed) and with the
 numpy-only reference. DQN (default ``MlpPolicy``, two hidden layers of 64) acts on the same observation space with
 a ``Discrete`` grid of 4 types x 9 parameter values standing in for the dribbling actions. Each figure is the best
 of ``--repeats`` runs of ``--calls`` decisions, which damps a shared machine's noise; report the load average with
@@ -14,7 +14,9 @@ Usage: ``python -m benchmarks.speed.runtime_speed [--quick] [--calls 5000] [--re
 
 Targets: <= 10 us per decision for the RBF policy with 10, 30 and 50 RBFs per input; <= 5 us at 50 RBFs
 per input with the default RBF window; <= 10 us for ``DeepPolicy`` (default networks, two hidden layers of 64);
-decisions identical to ``model.predict`` (tested in ``tests/test_export.py`` and ``tests/test_export_networks.py``).
+decisions identical to ``model.predict`` (tested in ``tests/test_export.py``, ``tests/test_export_networks.py`` and
+``tests/test_pdqn_export.py``). P-DQN / MP-DQN have no target of their own; their rows show what the two networks in
+series (and MP-DQN's K passes) cost.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from stable_baselines3 import DQN
 
 import robocup_dribble
 from benchmarks.speed.timing import load_average, microseconds
-from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
+from sb3_aac import MPDQN, PDQN, RuntimePolicy, SarsaAAC, export_policy
 
 ENV_PROFILE = "v11"
 DQN_ACTIONS = 36  # 4 types x 9 parameter values
@@ -52,11 +54,16 @@ class ObservationOnlyEnv(gym.Env):
         return self.observation_space.sample(), 0.0, False, False, {}
 
 
-def sarsa_model(policy: str, train_steps: int, **policy_kwargs: Any) -> SarsaAAC:
-    """A SarsaAAC model trained ``train_steps`` env steps (0: its initial weights)."""
+def trained_model(policy: str, train_steps: int, **policy_kwargs: Any) -> SarsaAAC | PDQN:
+    """A SarsaAAC model with ``policy``, or for ``policy`` "PDQN" / "MPDQN" that algorithm's, trained ``train_steps``
+    env steps (0: its initial weights)."""
     env = robocup_dribble.DribbleVecEnv(8, profile=ENV_PROFILE)
     env.seed(0)
-    model = SarsaAAC(policy, env, seed=0, policy_kwargs=policy_kwargs)
+    if policy in ("PDQN", "MPDQN"):
+        algorithm = PDQN if policy == "PDQN" else MPDQN
+        model: SarsaAAC | PDQN = algorithm("MlpPolicy", env, seed=0, learning_starts=100, policy_kwargs=policy_kwargs)
+    else:
+        model = SarsaAAC(policy, env, seed=0, policy_kwargs=policy_kwargs)
     return model.learn(train_steps) if train_steps > 0 else model
 
 
@@ -65,7 +72,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--quick", action="store_true", help="fewer calls, sizes and training steps (a few seconds)")
     parser.add_argument("--calls", type=int, default=5000, help="decisions per timing run")
     parser.add_argument("--repeats", type=int, default=5, help="timing runs per figure (the best is reported)")
-    parser.add_argument("--train-steps", type=int, default=2000, help="SarsaAAC training steps before export")
+    parser.add_argument("--train-steps", type=int, default=2000, help="training steps before export")
     args = parser.parse_args(argv)
     if args.quick:
         args.calls, args.repeats, args.train_steps = min(args.calls, 500), min(args.repeats, 3), min(args.train_steps, 200)
@@ -78,14 +85,14 @@ def main(argv: list[str] | None = None) -> None:
     configs: list[tuple[str, dict[str, Any]]] = [
         ("RbfPolicy", {"n_rbf": n}) for n in ((10, 50) if args.quick else (10, 30, 50))
     ]
-    configs.append(("DeepPolicy", {}))
+    configs += [("DeepPolicy", {}), ("PDQN", {}), ("MPDQN", {})]
     if not args.quick:
         configs += [("MlpPolicy", {"hidden_units": 2}), ("MlpPolicy", {}), ("RbfMlpPolicy", {})]
-        configs.append(("DeepPolicy", {"net_arch": [128, 128]}))
+        configs += [("DeepPolicy", {"net_arch": [128, 128]}), ("MPDQN", {"net_arch": [64, 64]})]
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for policy, kwargs in configs:
-            model = sarsa_model(policy, args.train_steps, **kwargs)
+            model = trained_model(policy, args.train_steps, **kwargs)
             path = export_policy(model, os.path.join(tmp, "policy.aacp"))
             fast, reference = RuntimePolicy.load(path), RuntimePolicy.load(path, backend="numpy")
             label = policy + "".join(f" {k}={v}" for k, v in kwargs.items())
@@ -101,7 +108,7 @@ def main(argv: list[str] | None = None) -> None:
         dqn = DQN("MlpPolicy", ObservationOnlyEnv(obs_space), seed=0, device="cpu")
         dqn_us = microseconds(lambda: dqn.predict(obs, deterministic=True), max(args.calls // 5, 100), args.repeats)
 
-        print(f"\n{'policy':32s} {'RuntimePolicy.act':>18s} {'act (numpy only)':>17s} {'SarsaAAC.predict':>17s}")
+        print(f"\n{'policy':32s} {'RuntimePolicy.act':>18s} {'act (numpy only)':>17s} {'model.predict':>17s}")
         for label, fast_us, numpy_us, predict_us, backend in rows:
             print(f"{label:32s} {fast_us:13.2f} ({backend}) {numpy_us:17.2f} {predict_us:17.2f}")
         print(f"{'SB3 DQN.predict (MLP 64x64)':32s} {'':18s} {'':17s} {dqn_us:17.2f}")
@@ -111,7 +118,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"{'RBFs/input':>10s} {'n':>6s} {'act us':>8s} {'numpy us':>9s}")
         features, costs = [], []
         for n_rbf in sizes:
-            model = sarsa_model("RbfPolicy", 0 if args.quick else 200, n_rbf=n_rbf)
+            model = trained_model("RbfPolicy", 0 if args.quick else 200, n_rbf=n_rbf)
             path = export_policy(model, os.path.join(tmp, "policy.aacp"))
             fast, reference = RuntimePolicy.load(path), RuntimePolicy.load(path, backend="numpy")
             fast_us = microseconds(lambda r=fast: r.act(obs), args.calls, args.repeats)

@@ -18,7 +18,7 @@ def add_export_command(add: Any) -> None:
         "write MODEL's policy as plain arrays + JSON for a runtime without torch (sb3_aac.runtime.RuntimePolicy, C++)",
         "sb3-aac export runs/rbf/model.zip dribbler.aacp",
     )
-    export.add_argument("model", metavar="MODEL", help="a SarsaAAC model.zip")
+    export.add_argument("model", metavar="MODEL", help="a model.zip (SarsaAAC, HybridPPO, PDQN or MPDQN)")
     export.add_argument("out", metavar="OUT", help="the policy file to write (.aacp); format: docs/export-format.md")
     add_trust_argument(export)
     export.set_defaults(func=cmd_export)

@@ -120,19 +120,13 @@ def cmd_train(args: argparse.Namespace) -> None:
 
 def run_folder(args: argparse.Namespace) -> RunFolder:
     """The ``--out`` folder, checked before training: writable, and not holding the run's files unless --overwrite."""
-    names = ("model.zip", "policy.aacp", "run.json") if exported(args.algo) else ("model.zip", "run.json")
+    names = ("model.zip", "policy.aacp", "run.json")
     if not args.out:
         raise CliError("cannot write --out directory '': give a folder name, e.g. runs/name")
     try:
         return RunFolder(args.out, names, "--out directory", overwrite=args.overwrite)
     except ValueError as error:
         raise CliError(str(error)) from None
-
-
-def exported(algo: str) -> bool:
-    """Whether ``train --out`` exports the policy (the .aacp format carries SarsaAAC's and HybridPPO's, not P-DQN's
-    Q network over the parameters, docs/pdqn.md)."""
-    return algo in ("sarsa_aac", "hppo")
 
 
 def training_budget(args: argparse.Namespace) -> tuple[int, str]:
@@ -195,22 +189,23 @@ def run_settings(args: argparse.Namespace, model: Any, kwargs: dict[str, Any]) -
 
 
 def save_run(model: Any, folder: RunFolder, settings: dict[str, Any]) -> None:
-    """Write model.zip, policy.aacp (SarsaAAC only) and, last, run.json into the ``--out`` folder, each in one step."""
+    """Write model.zip, policy.aacp and, last, run.json into the ``--out`` folder, each in one step."""
     from sb3_aac import export_policy
 
     out = folder.out
     try:
         with folder.file("model.zip") as tmp:
             model.save(tmp)
-        if exported(settings["algo"]):
-            with folder.file("policy.aacp") as tmp:
-                export_policy(model, tmp, metadata={"env_id": settings["env_id"]})
+        with folder.file("policy.aacp") as tmp:
+            export_policy(model, tmp, metadata={"env_id": settings["env_id"]})
         with folder.file("run.json") as tmp:
             tmp.write_text(json.dumps(settings, indent=2) + "\n")
     except OSError as error:
         raise CliError(f"cannot write the run to {out}: {error.strerror or error}") from None
-    runtime = f", {out / 'policy.aacp'} (RuntimePolicy.load)" if exported(settings["algo"]) else ""
-    print(f"saved {out / 'model.zip'} ({ALGOS[settings['algo']].class_name}.load){runtime} and {out / 'run.json'}")
+    print(
+        f"saved {out / 'model.zip'} ({ALGOS[settings['algo']].class_name}.load), {out / 'policy.aacp'} "
+        f"(RuntimePolicy.load) and {out / 'run.json'}"
+    )
 
 
 def evaluate_greedy(model: Any, args: argparse.Namespace) -> None:

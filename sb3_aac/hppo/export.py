@@ -14,24 +14,18 @@ from typing import Any
 
 import numpy as np
 from stable_baselines3.common.torch_layers import FlattenExtractor
-from torch import nn
 
+from sb3_aac.common.network_export import array_of, network_layers, policy_file_contents
 from sb3_aac.common.torch_layers import BoundsScaledFlatten
 from sb3_aac.hppo.policies import HybridActorCriticPolicy
-from sb3_aac.runtime.format import ARRAY_DTYPE, FORMAT_NAME, output_layout, written_version
-
-ACTIVATIONS = {nn.Tanh: "tanh", nn.ReLU: "relu", nn.LeakyReLU: "leaky_relu"}
-
-
-def _array(value: Any) -> np.ndarray:
-    return np.ascontiguousarray(value.detach().cpu().numpy().astype(ARRAY_DTYPE))
+from sb3_aac.runtime.format import output_layout
 
 
 def _observation_scaling(policy: HybridActorCriticPolicy) -> tuple[np.ndarray, np.ndarray]:
     """``obs_mid`` and ``obs_half`` of the features extractor (the format's ``scaled`` features)."""
     extractor = policy.features_extractor
     if isinstance(extractor, BoundsScaledFlatten):
-        return _array(extractor.obs_mid), _array(extractor.obs_half)
+        return array_of(extractor.obs_mid), array_of(extractor.obs_half)
     if type(extractor) is FlattenExtractor:
         size = int(np.prod(policy.observation_space.shape))  # type: ignore[arg-type]
         return np.zeros(size), np.ones(size)
@@ -39,27 +33,6 @@ def _observation_scaling(policy: HybridActorCriticPolicy) -> tuple[np.ndarray, n
         f"Cannot export a HybridPPO policy whose features extractor is {type(extractor).__name__}: the format's networks "
         "read the observation scaled affinely (BoundsScaledFlatten, the default, or FlattenExtractor)"
     )
-
-
-def _layers(modules: list[nn.Module], network: int, arrays: dict[str, np.ndarray]) -> list[dict[str, Any]]:
-    """The ``layers`` of one network, adding its weights to ``arrays`` as ``net{network}_{j}_weight/bias``."""
-    flat = [m for module in modules for m in (module if isinstance(module, nn.Sequential) else [module])]
-    layers: list[dict[str, Any]] = []
-    for j, layer in enumerate(flat):
-        if isinstance(layer, nn.Linear):
-            layers.append({"type": "linear", "in": layer.in_features, "out": layer.out_features})
-            arrays[f"net{network}_{j}_weight"] = _array(layer.weight)
-            arrays[f"net{network}_{j}_bias"] = _array(layer.bias)
-        elif type(layer) in ACTIVATIONS:
-            layers.append({"type": "activation", "function": ACTIVATIONS[type(layer)]})
-            if isinstance(layer, nn.LeakyReLU):
-                layers[-1]["slope"] = float(layer.negative_slope)
-        else:
-            raise ValueError(
-                f"Cannot export a {type(layer).__name__} layer: the format's networks hold Linear layers and the "
-                f"activations {sorted(ACTIVATIONS.values())}"
-            )
-    return layers
 
 
 def networks_head(policy: HybridActorCriticPolicy) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
@@ -82,7 +55,7 @@ def networks_head(policy: HybridActorCriticPolicy) -> tuple[dict[str, Any], dict
             ([outputs["value"], outputs["value"] + 1], [policy.value_net, policy.value_head]),
         )
     ):
-        networks.append({"columns": list(columns), "layers": _layers(modules, i, arrays)})
+        networks.append({"columns": list(columns), "layers": network_layers(modules, i, arrays)})
     head = {"type": "networks", "networks": networks}
     approximators = {
         "n_outputs": n_outputs,
@@ -100,29 +73,5 @@ def export_contents(
     The header (without the arrays table) and the arrays of a HybridPPO policy's ``.aacp`` file (version 3), with
     ``action`` as the header's action section (:func:`sb3_aac.export.action_header` of the policy's spec).
     """
-    from sb3_aac import __version__
-
     approximators, arrays = networks_head(policy)
-    space = policy.observation_space
-    size = len(arrays["obs_mid"])
-    header = {
-        "format": FORMAT_NAME,
-        "version": written_version(approximators["head"]),
-        "writer": f"sb3-aac {__version__}",
-        "algorithm": "HybridPPO",
-        "policy_class": type(policy).__name__,
-        "observation": {"shape": [int(s) for s in space.shape], "size": size, "dtype": str(space.dtype)},  # type: ignore[union-attr]
-        "action": action,
-        "approximators": approximators,
-        "metadata": dict(metadata or {}),
-    }
-    low = np.broadcast_to(np.asarray(space.low, dtype=ARRAY_DTYPE).ravel(), (size,))  # type: ignore[attr-defined]
-    high = np.broadcast_to(np.asarray(space.high, dtype=ARRAY_DTYPE).ravel(), (size,))  # type: ignore[attr-defined]
-    arrays = {
-        "obs_low": np.ascontiguousarray(low),
-        "obs_high": np.ascontiguousarray(high),
-        **arrays,
-        "param_low": policy.spec.low.astype(ARRAY_DTYPE),
-        "param_high": policy.spec.high.astype(ARRAY_DTYPE),
-    }
-    return header, arrays
+    return policy_file_contents("HybridPPO", policy, policy.spec, approximators, arrays, action, metadata)

@@ -1,8 +1,8 @@
 """
-Greedy SarsaAAC decisions from an exported policy file, with numpy alone.
+Greedy decisions (SarsaAAC, HybridPPO, P-DQN, MP-DQN) from an exported policy file, with numpy alone.
 
 :func:`sb3_aac.export_policy` writes a trained policy as plain arrays and a JSON description (format
-``sb3-aac-policy`` versions 2 and 3, see ``docs/export-format.md``); :class:`RuntimePolicy` reads it back and acts::
+``sb3-aac-policy`` versions 2 to 4, see ``docs/export-format.md``); :class:`RuntimePolicy` reads it back and acts::
 
     from sb3_aac.runtime import RuntimePolicy
 

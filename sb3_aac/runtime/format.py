@@ -1,5 +1,5 @@
 """
-The ``.aacp`` policy file format (``sb3-aac-policy`` versions 2 and 3, see ``docs/export-format.md``): its constants, the
+The ``.aacp`` policy file format (``sb3-aac-policy`` versions 2 to 4, see ``docs/export-format.md``): its constants, the
 arrays a header calls for, the byte layout (:func:`encode_policy_file`, which :func:`sb3_aac.export_policy` writes
 with) and the reader. :func:`read_policy_file` checks the magic bytes, a SHA-256 over the whole file, the format
 version, and the name, dtype, shape and placement of every array before returning any of them;
@@ -20,13 +20,15 @@ from typing import Any
 import numpy as np
 
 from .actions import LAYOUTS
-from .forward import check_networks, check_rbf_window, network_array_shapes
+from .forward import check_networks, check_pdqn_head, check_rbf_window, network_array_shapes
 
 FORMAT_NAME = "sb3-aac-policy"
-# 2: the first released version; 3: adds the "networks" head (feed-forward networks). Older files are not read.
-FORMAT_VERSION = 3
-SUPPORTED_VERSIONS = (2, 3)
+# 2: the first released version; 3: adds the "networks" head (feed-forward networks); 4: adds the "pdqn" head (P-DQN's
+# parameter actor and Q network in series). Older files are not read.
+FORMAT_VERSION = 4
+SUPPORTED_VERSIONS = (2, 3, 4)
 NETWORKS_VERSION = 3  # the first version with a "networks" head
+PDQN_VERSION = 4  # the first version with a "pdqn" head
 MAGIC = b"SB3AACP\x00"  # 8 bytes
 PREAMBLE = struct.Struct("<8sQ")  # magic, header length (bytes)
 DIGEST_SIZE = 32  # the file ends with the SHA-256 of everything before it
@@ -47,8 +49,9 @@ TILE_ARRAYS = (
 
 def written_version(head: dict[str, Any]) -> int:
     """The version :func:`sb3_aac.export_policy` writes for a header's ``approximators.head``: the oldest that holds
-    it (3 for a ``networks`` head, else 2), so older readers keep reading the policies they can compute."""
-    return NETWORKS_VERSION if head["type"] == "networks" else 2
+    it (4 for a ``pdqn`` head, 3 for a ``networks`` head, else 2), so older readers keep reading the policies they
+    can compute."""
+    return {"pdqn": PDQN_VERSION, "networks": NETWORKS_VERSION}.get(head["type"], 2)
 
 
 def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
@@ -72,7 +75,7 @@ def expected_array_shapes(header: dict[str, Any]) -> dict[str, tuple[int, ...]]:
         c, k = approx["features"]["n_codings"], approx["features"]["group_size"]
         shapes.update(tile_inputs=(c, k), tile_offsets=(c, k), tile_resolution=(c, k), tile_strides=(c, k), tile_bases=(c,))
         shapes.update(tile_weight=(f, a), bias=(a,))
-    elif approx["head"]["type"] == "networks":
+    elif approx["head"]["type"] in ("networks", "pdqn"):
         shapes.update(network_array_shapes(approx["head"]["networks"]))
     elif approx["head"]["type"] == "linear":
         shapes.update(weight=(a, f), bias=(a,))
@@ -140,8 +143,9 @@ def _positive_int(value: Any) -> bool:
     return _count(value) and value >= 1
 
 
-def _check_features_and_head(features: Any, head: Any, d: int, n_outputs: int, version: int, path: Any) -> None:
+def _check_features_and_head(approx: Any, action: dict[str, Any], d: int, version: int, path: Any) -> None:
     """The header's ``features`` and ``head`` sections (``KeyError``/``TypeError`` for a missing or mistyped field)."""
+    features, head = approx["features"], approx["head"]
     if features["type"] == "rbf":
         if not _positive_int(features["n_rbf"]) or features["n_features"] != d * features["n_rbf"]:
             raise _fail(path, f"RBF features: n_rbf={features['n_rbf']!r}, n_features={features['n_features']!r}, {d} inputs")
@@ -159,6 +163,13 @@ def _check_features_and_head(features: Any, head: Any, d: int, n_outputs: int, v
             raise _fail(path, why)
     else:
         raise _fail(path, f"unknown feature type {features['type']!r} (known: 'rbf', 'scaled', 'tiles')")
+    _check_head(approx, action, d, version, path)
+
+
+def _check_head(approx: Any, action: dict[str, Any], d: int, version: int, path: Any) -> None:
+    """The header's ``head`` section, given checked features (``KeyError``/``TypeError`` for a missing or mistyped
+    field)."""
+    features, head = approx["features"], approx["head"]
     if head["type"] == "tanh_mlp":
         if not _positive_int(head["hidden_units"]):
             raise _fail(path, f"hidden_units={head['hidden_units']!r}")
@@ -167,11 +178,19 @@ def _check_features_and_head(features: Any, head: Any, d: int, n_outputs: int, v
             why = f"a networks head needs version >= {NETWORKS_VERSION} and scaled features"
             raise _fail(path, f"{why}, got version {version}, features {features!r}")
         try:
-            check_networks(head["networks"], d, n_outputs)
+            check_networks(head["networks"], d, approx["n_outputs"])
+        except ValueError as error:
+            raise _fail(path, str(error)) from None
+    elif head["type"] == "pdqn":
+        if version < PDQN_VERSION or features["type"] != "scaled":
+            why = f"a pdqn head needs version >= {PDQN_VERSION} and scaled features"
+            raise _fail(path, f"{why}, got version {version}, features {features!r}")
+        try:
+            check_pdqn_head(head, d, action["n_types"], action["n_params"])
         except ValueError as error:
             raise _fail(path, str(error)) from None
     elif head["type"] != "linear":
-        raise _fail(path, f"unknown head type {head['type']!r} (known: 'linear', 'tanh_mlp', 'networks')")
+        raise _fail(path, f"unknown head type {head['type']!r} (known: 'linear', 'tanh_mlp', 'networks', 'pdqn')")
 
 
 def _check_header(header: Any, path: Any) -> None:
@@ -199,11 +218,11 @@ def _check_header(header: Any, path: Any) -> None:
             offset += dim
         if not _count(action["n_params"]) or action["n_params"] != offset:
             raise _fail(path, f"n_params is {action['n_params']!r} but the types' dims add up to {offset}")
-        features, head = approx["features"], approx["head"]
+        features = approx["features"]
         if not (_positive_int(features["n_features"]) and _positive_int(approx["n_outputs"])):
             sizes = f"n_features={features['n_features']!r}, n_outputs={approx['n_outputs']!r}"
             raise _fail(path, f"{sizes}: both must be whole numbers >= 1")
-        _check_features_and_head(features, head, d, approx["n_outputs"], header["version"], path)
+        _check_features_and_head(approx, action, d, header["version"], path)
         outputs = approx["outputs"]
         n_outputs, expected = output_layout(k, offset)
         if approx["n_outputs"] != n_outputs or outputs != expected:

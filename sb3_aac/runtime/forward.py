@@ -1,7 +1,9 @@
 """
 The approximators' forward pass, numpy only: :class:`BankForward` (scaled-input or RBF features, linear or one-tanh
--layer heads) and :class:`TileForward` (tile coding). Training subclasses them
-(:class:`sb3_aac.sarsa_aac.approximators.BankKernel`, :class:`sb3_aac.sarsa_aac.tile_coding.TileKernel`), and
+-layer heads), :class:`TileForward` (tile coding), :class:`NetworkForward` (a ``networks`` head) and
+:class:`PDQNForward` (a ``pdqn`` head). Training subclasses the first three
+(:class:`sb3_aac.sarsa_aac.approximators.BankKernel`, :class:`sb3_aac.sarsa_aac.tile_coding.TileKernel`,
+:class:`sb3_aac.sarsa_aac.deep.DeepKernel`), and
 ``model.predict`` and :class:`~sb3_aac.runtime.policy.RuntimePolicy` call them, so an exported policy decides
 with the very code training ran.
 """
@@ -9,6 +11,7 @@ with the very code training ran.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -258,22 +261,47 @@ def check_networks(networks: Any, n_inputs: int, n_outputs: int) -> None:
         raise ValueError(f"networks must be a non-empty list, got {networks!r}")
     covered = np.zeros(n_outputs, dtype=np.int64)
     for i, network in enumerate(networks):
-        start, stop = network["columns"]
-        if not (type(start) is int and type(stop) is int and 0 <= start < stop <= n_outputs):
-            raise ValueError(f"network {i}: columns {network['columns']!r} must be [start, stop) within [0, {n_outputs}]")
+        start, stop = _check_network(network, i, n_inputs, n_outputs)
         covered[start:stop] += 1
-        size = n_inputs
-        layers = network["layers"]
-        if not isinstance(layers, list):
-            raise ValueError(f"network {i}: layers must be a list, got {layers!r}")
-        for j, layer in enumerate(layers):
-            size = _check_layer(layer, size, f"network {i}, layer {j}")
-        if size != stop - start:
-            raise ValueError(f"network {i} ends with {size} values for its {stop - start} columns {network['columns']}")
     if not (covered == 1).all():
         raise ValueError(
             f"the networks' columns must cover each of the {n_outputs} outputs exactly once, got {covered.tolist()}"
         )
+
+
+def check_pdqn_head(head: Any, n_inputs: int, n_types: int, n_params: int) -> None:
+    """
+    A ``ValueError`` unless ``head`` (a header's ``approximators.head`` of type ``pdqn``) holds ``multi_pass`` (true or
+    false) and two ``networks``: the parameter actor, reading the ``n_inputs`` scaled inputs and writing the
+    ``n_params`` parameter columns ``[K, K + P]``, then the Q network, reading ``n_inputs + n_params`` values (the
+    scaled inputs, then the actor's parameters) and writing the Q columns ``[0, K]``; a ``KeyError`` or ``TypeError``
+    for a missing or mistyped field.
+    """
+    if type(head["multi_pass"]) is not bool:
+        raise ValueError(f"a pdqn head's multi_pass must be true or false, got {head['multi_pass']!r}")
+    networks = head["networks"]
+    if not isinstance(networks, list) or len(networks) != 2:
+        raise ValueError(f"a pdqn head holds two networks (the parameter actor, then the Q network), got {networks!r}")
+    k, n_outputs = n_types, n_types + n_params + 1
+    for i, (n_in, columns) in enumerate(((n_inputs, [k, k + n_params]), (n_inputs + n_params, [0, k]))):
+        if _check_network(networks[i], i, n_in, n_outputs) != tuple(columns):
+            raise ValueError(f"network {i} of a pdqn head writes the columns {columns}, got {networks[i]['columns']!r}")
+
+
+def _check_network(network: dict[str, Any], i: int, n_inputs: int, n_outputs: int) -> tuple[int, int]:
+    """Check network ``i`` reading ``n_inputs`` values; return its columns ``(start, stop)``."""
+    start, stop = network["columns"]
+    if not (type(start) is int and type(stop) is int and 0 <= start < stop <= n_outputs):
+        raise ValueError(f"network {i}: columns {network['columns']!r} must be [start, stop) within [0, {n_outputs}]")
+    size = n_inputs
+    layers = network["layers"]
+    if not isinstance(layers, list):
+        raise ValueError(f"network {i}: layers must be a list, got {layers!r}")
+    for j, layer in enumerate(layers):
+        size = _check_layer(layer, size, f"network {i}, layer {j}")
+    if size != stop - start:
+        raise ValueError(f"network {i} ends with {size} values for its {stop - start} columns {network['columns']}")
+    return start, stop
 
 
 def _check_layer(layer: dict[str, Any], size: int, where: str) -> int:
@@ -300,14 +328,14 @@ def _check_layer(layer: dict[str, Any], size: int, where: str) -> int:
     raise ValueError(f"{where}: unknown layer type {kind!r} (known: {list(LAYER_TYPES)})")
 
 
-class NetworkForward:
+class ScaledNetworks:
     """
-    The forward pass of a ``networks`` head: feed-forward networks over the scaled observation, each writing a range
-    of the ``A`` outputs (the only implementation of these formulas: the deep SarsaAAC policy trains on it,
-    ``model.predict`` and :class:`~sb3_aac.runtime.policy.RuntimePolicy` call it).
+    Feed-forward networks over the scaled observation: the layers' formulas (the only implementation of them: the
+    deep SarsaAAC policy trains on them, ``model.predict`` and :class:`~sb3_aac.runtime.policy.RuntimePolicy` call
+    them). :class:`NetworkForward` and :class:`PDQNForward` say what the networks read and which outputs they write.
 
     The input is ``x = (s - obs_mid) / obs_half`` (``D`` values, computed as ``s * a - b``). Network ``i`` applies its
-    layers in order to ``x`` and writes its last values to the outputs ``columns[0] .. columns[1] - 1``. Layers:
+    layers in order to the values it is given. Layers:
 
     - ``linear``: ``y = W @ h + b`` with ``W = net{i}_{j}_weight`` ``(out, in)``, ``b = net{i}_{j}_bias`` ``(out,)``;
     - ``layernorm``: ``y = (h - mean(h)) / sqrt(var(h) + eps)`` over the layer's values (``var`` the mean squared
@@ -316,22 +344,14 @@ class NetworkForward:
 
     :param obs_mid: ``(D,)`` input shift
     :param obs_half: ``(D,)`` input scale (> 0)
-    :param networks: the header's ``head.networks`` (checked with :func:`check_networks`)
+    :param networks: the header's ``head.networks`` (checked by the subclass)
     :param arrays: the layer arrays by name (:func:`network_array_shapes`); held as given (views), so in-place
         updates are seen by the next call
-    :param n_outputs: ``A``
     """
 
     def __init__(
-        self,
-        obs_mid: np.ndarray,
-        obs_half: np.ndarray,
-        networks: list[dict[str, Any]],
-        arrays: dict[str, np.ndarray],
-        n_outputs: int,
+        self, obs_mid: np.ndarray, obs_half: np.ndarray, networks: list[dict[str, Any]], arrays: dict[str, np.ndarray]
     ):
-        check_networks(networks, len(obs_mid), n_outputs)
-        self.n_outputs = n_outputs
         self.set_input_scaling(obs_mid, obs_half)
         self.networks = networks
         self.columns = [tuple(network["columns"]) for network in networks]
@@ -361,7 +381,7 @@ class NetworkForward:
 
     def network(self, i: int, x: np.ndarray, cache: list[tuple[np.ndarray, ...]] | None = None) -> np.ndarray:
         """
-        Network ``i`` on inputs ``(n, D)``: its outputs ``(n, stop - start)``. With ``cache``, one tuple per layer is
+        Network ``i`` on its inputs ``(n, in)``: its outputs ``(n, stop - start)``. With ``cache``, one tuple per layer is
         appended to it: the layer's input, and for a layer norm also ``(h - mean) / sqrt(var + eps)`` (before any
         affine map) and ``1 / sqrt(var + eps)`` ``(n, 1)``: what a backward pass needs.
         """
@@ -390,9 +410,76 @@ class NetworkForward:
                 cache.append((h_in,))
         return h
 
+
+class NetworkForward(ScaledNetworks):
+    """
+    The forward pass of a ``networks`` head: networks over the scaled observation (:class:`ScaledNetworks`), network
+    ``i`` writing its last values to the outputs ``columns[0] .. columns[1] - 1``; together they write each of the
+    ``A`` outputs once.
+
+    :param n_outputs: ``A``; the other arguments are :class:`ScaledNetworks`', ``networks`` checked with
+        :func:`check_networks`
+    """
+
+    def __init__(
+        self,
+        obs_mid: np.ndarray,
+        obs_half: np.ndarray,
+        networks: list[dict[str, Any]],
+        arrays: dict[str, np.ndarray],
+        n_outputs: int,
+    ):
+        check_networks(networks, len(obs_mid), n_outputs)
+        self.n_outputs = n_outputs
+        super().__init__(obs_mid, obs_half, networks, arrays)
+
     def outputs(self, x: np.ndarray) -> tuple[np.ndarray, None]:
         """Scaled inputs ``(n, D)`` -> every output ``(n, A)`` (and None, as :meth:`BankForward.outputs` for a linear head)."""
         out = np.empty((len(x), self.n_outputs))
         for i, (start, stop) in enumerate(self.columns):
             out[:, start:stop] = self.network(i, x)
         return out, None
+
+
+class PDQNForward(ScaledNetworks):
+    """
+    The forward pass of a ``pdqn`` head: P-DQN's and MP-DQN's greedy decision (Xiong et al. 2018, Bester et al. 2019).
+
+    Network 0, the parameter actor, maps the scaled inputs ``x`` to every type's scaled parameters ``p = x(s)``
+    (``P`` values, not clipped). Network 1, the Q network, reads ``[x, p]`` (``D + P`` values) and writes the ``K``
+    values ``Q_k``: in one pass (P-DQN), or (``multi_pass``, MP-DQN) in ``K`` passes, pass ``k`` reading ``p`` with
+    every parameter not of type ``k`` set to 0 and giving ``Q_k`` alone. The outputs are ``Q`` (``K``), ``p``
+    (``P``) and ``V = max_k Q_k``, the greedy value.
+
+    :param head: the header's ``approximators.head`` (checked with :func:`check_pdqn_head`)
+    :param offsets: the ``K + 1`` parameter offsets (type ``k`` owns parameters ``offsets[k] .. offsets[k + 1] - 1``)
+    """
+
+    def __init__(
+        self,
+        obs_mid: np.ndarray,
+        obs_half: np.ndarray,
+        head: dict[str, Any],
+        arrays: dict[str, np.ndarray],
+        offsets: Sequence[int],
+    ):
+        k, n_params = len(offsets) - 1, offsets[-1]
+        check_pdqn_head(head, len(obs_mid), k, n_params)
+        super().__init__(obs_mid, obs_half, head["networks"], arrays)
+        self.n_types, self.n_params, self.multi_pass = k, n_params, head["multi_pass"]
+        owner = np.zeros((k, n_params))
+        for j in range(k):
+            owner[j, offsets[j] : offsets[j + 1]] = 1.0
+        self.owner = owner  # owner[k, j] = 1 if parameter j belongs to type k
+
+    def outputs(self, x: np.ndarray) -> tuple[np.ndarray, None]:
+        """Scaled inputs ``(n, D)`` -> ``Q``, ``p`` and ``V``, ``(n, K + P + 1)`` (and None, as :class:`NetworkForward`)."""
+        n, k = len(x), self.n_types
+        params = self.network(0, x)
+        if self.multi_pass:  # pass j: rows j * n .. (j + 1) * n - 1
+            masked = (params[None] * self.owner[:, None]).reshape(k * n, self.n_params)
+            q_all = self.network(1, np.concatenate((np.tile(x, (k, 1)), masked), axis=1)).reshape(k, n, k)
+            q = q_all.diagonal(axis1=0, axis2=2)  # (n, K): Q_j from pass j
+        else:
+            q = self.network(1, np.concatenate((x, params), axis=1))
+        return np.concatenate((q, params, q.max(1, keepdims=True)), axis=1), None

@@ -1,6 +1,7 @@
 """
-The optional numba kernel behind :meth:`~sb3_aac.runtime.policy.RuntimePolicy.act`: one greedy decision for one
-observation, the formulas of :class:`~sb3_aac.runtime.forward.BankForward` and
+The optional numba kernels behind :meth:`~sb3_aac.runtime.policy.RuntimePolicy.act`: one greedy decision for one
+observation, the formulas of :class:`~sb3_aac.runtime.forward.BankForward` (and further down of the ``networks`` and
+``pdqn`` heads) and
 :func:`~sb3_aac.runtime.actions.unscale_value` written as loops and compiled. Without numba the runtime uses numpy
 alone.
 
@@ -18,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .actions import unscale_value
-from .forward import BankForward, NetworkForward
+from .forward import BankForward, NetworkForward, PDQNForward
 
 # n_rbf: RBFs per input (0: scaled inputs); hidden_units: tanh units per approximator (0: linear head).
 SIZE_FIELDS = ("n_inputs", "n_rbf", "n_features", "hidden_units", "n_types")
@@ -158,15 +159,15 @@ def act_kernel() -> Any:
     return _ACT_KERNEL
 
 
-# The numba kernel of a "networks" head (NetworkForward). Its meta (int64) starts with NETWORK_FIELDS (sizes, then
-# where each array of its pack starts), then the K + 1 parameter offsets, then NETWORK_RECORD values per network, then
-# LAYER_RECORD values per layer; its pack (float64) holds the input scaling, the parameter bounds and every layer's
-# arrays and constant.
-NETWORK_FIELDS = ("n_inputs", "n_types", "n_networks", "feature_a", "feature_b", "param_low", "param_high")
-N_INPUTS, N_TYPES, N_NETWORKS, N_FEATURE_A, N_FEATURE_B, N_PARAM_LOW, N_PARAM_HIGH = range(len(NETWORK_FIELDS))
+# The numba kernels of a "networks" head (NetworkForward) and of a "pdqn" head (PDQNForward). Their meta (int64) starts
+# with NETWORK_FIELDS (sizes, then where each array of its pack starts), then the K + 1 parameter offsets, then
+# NETWORK_RECORD values per network, then LAYER_RECORD values per layer; their pack (float64) holds the input scaling,
+# the parameter bounds and every layer's arrays and constant.
+NETWORK_FIELDS = ("n_inputs", "n_types", "n_networks", "multi_pass", "feature_a", "feature_b", "param_low", "param_high")
+N_INPUTS, N_TYPES, N_NETWORKS, N_MULTI_PASS, N_FEATURE_A, N_FEATURE_B, N_PARAM_LOW, N_PARAM_HIGH = range(len(NETWORK_FIELDS))
 # Per network: its first output column, one past its last, whether act() needs it (it writes Q or parameters), its
-# first layer record and its number of layers.
-NETWORK_RECORD = ("start", "stop", "needed", "first_layer", "n_layers")
+# first layer record, its number of layers and its number of inputs.
+NETWORK_RECORD = ("start", "stop", "needed", "first_layer", "n_layers", "n_in")
 # Per layer: its code (LAYER_CODES), its number of inputs and outputs, where its weight, bias (-1: none) and
 # constant (eps or slope) start in pack.
 LAYER_RECORD = ("code", "n_in", "n_out", "weight", "bias", "constant")
@@ -174,9 +175,9 @@ LAYER_CODES = ("linear", "layernorm", "tanh", "relu", "leaky_relu")
 
 
 def network_kernel_arguments(
-    net: NetworkForward, param_low: np.ndarray, param_high: np.ndarray, offsets: Sequence[int]
+    net: NetworkForward | PDQNForward, param_low: np.ndarray, param_high: np.ndarray, offsets: Sequence[int]
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """``pack``, ``meta`` (see the comments above :data:`NETWORK_FIELDS`) and the widest layer of ``net``."""
+    """``pack``, ``meta`` (see the comments above :data:`NETWORK_FIELDS`) and the widest layer or input of ``net``."""
     segments: list[np.ndarray] = []
     position = 0
 
@@ -190,26 +191,32 @@ def network_kernel_arguments(
 
     d, n_types = len(net.feature_a), len(offsets) - 1
     value_column = n_types + offsets[-1]
+    pdqn = isinstance(net, PDQNForward)
+    inputs = (d, d + offsets[-1]) if pdqn else (d,) * len(net.columns)  # PDQNForward: the Q network reads [x, p]
     starts = [put(net.feature_a), put(net.feature_b), put(param_low), put(param_high)]
     network_records: list[int] = []
     layer_records: list[int] = []
-    width = d
-    for (start, stop), layers in zip(net.columns, net.layers, strict=True):
-        network_records += [start, stop, int(start < value_column), len(layer_records) // len(LAYER_RECORD), len(layers)]
-        size = d
+    width = max(inputs)
+    for (start, stop), layers, n_in in zip(net.columns, net.layers, inputs, strict=True):
+        first = len(layer_records) // len(LAYER_RECORD)
+        network_records += [start, stop, int(start < value_column), first, len(layers), n_in]
+        size = n_in
         for kind, weight, bias, constant in layers:
             n_out = len(weight) if kind == "linear" and weight is not None else size
             layer_records += [LAYER_CODES.index(kind), size, n_out, put(weight), put(bias), put(np.array([constant]))]
             size, width = n_out, max(width, n_out)
-    meta = np.array([d, n_types, len(net.columns), *starts, *offsets, *network_records, *layer_records], dtype=np.int64)
+    multi_pass = int(isinstance(net, PDQNForward) and net.multi_pass)
+    fields = [d, n_types, len(net.columns), multi_pass, *starts]
+    meta = np.array([*fields, *offsets, *network_records, *layer_records], dtype=np.int64)
     return np.concatenate(segments), meta, width
 
 
-def _compile_network_kernel() -> Any:  # noqa: C901 (a compiled kernel: its loops and branches are the point)
+def _compile_network_kernels() -> tuple[Any, Any] | None:  # noqa: C901 (compiled kernels: their loops are the point)
     """
-    A numba-compiled ``act`` for one observation of a ``networks`` head, or None without numba: the formulas of
-    :class:`~sb3_aac.runtime.forward.NetworkForward` (skipping the networks that write only the value), the argmax
-    and :func:`~sb3_aac.runtime.actions.unscale_value`, written as loops. Sums run in another order than numpy's, so
+    The numba-compiled ``act`` for one observation of a ``networks`` head and of a ``pdqn`` head, or None without
+    numba: the formulas of :class:`~sb3_aac.runtime.forward.NetworkForward` (skipping the networks that write only
+    the value) and :class:`~sb3_aac.runtime.forward.PDQNForward`, the argmax and
+    :func:`~sb3_aac.runtime.actions.unscale_value`, written as loops. Sums run in another order than numpy's, so
     outputs can differ in the last bits; the decisions are the same except at ties of that size.
     """
     try:
@@ -221,80 +228,131 @@ def _compile_network_kernel() -> Any:  # noqa: C901 (a compiled kernel: its loop
     n_fields, n_net, n_layer = len(NETWORK_FIELDS), len(NETWORK_RECORD), len(LAYER_RECORD)
 
     @numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
-    def act_network_kernel(x, pack, meta, scratch, out, params):  # type: ignore[no-untyped-def]  # noqa: C901  # pragma: no cover
-        # scratch: (3, width) float64; row 0 holds the scaled input, rows 1 and 2 a network's layers in turn.
-        d, n_types, n_networks = meta[N_INPUTS], meta[N_TYPES], meta[N_NETWORKS]
-        fa, fb, plow, phigh = meta[N_FEATURE_A], meta[N_FEATURE_B], meta[N_PARAM_LOW], meta[N_PARAM_HIGH]
-        offsets = n_fields
-        records = offsets + n_types + 1
-        layer_base = records + n_networks * n_net
+    def run_network(pack, meta, net, scratch):  # type: ignore[no-untyped-def]  # pragma: no cover
+        # Network net on scratch[0, :n_in]; its values end in one of rows 1 and 2 (returned), which it uses in turn.
+        n_types, n_networks = meta[N_TYPES], meta[N_NETWORKS]
+        r = n_fields + n_types + 1 + net * n_net
+        layer_base = n_fields + n_types + 1 + n_networks * n_net
+        src, size = 0, meta[r + 5]
+        for layer in range(meta[r + 3], meta[r + 3] + meta[r + 4]):
+            q = layer_base + layer * n_layer
+            code, n_out, pw, pb, pc = meta[q], meta[q + 2], meta[q + 3], meta[q + 4], meta[q + 5]
+            dst = 1 if src != 1 else 2
+            h, y = scratch[src], scratch[dst]  # 1-D views: contiguous loops that LLVM vectorises
+            if code == 0:  # linear
+                weight = pack[pw : pw + n_out * size]
+                for o in range(n_out):
+                    row = weight[o * size : (o + 1) * size]
+                    acc = 0.0
+                    for i in range(size):
+                        acc += row[i] * h[i]
+                    y[o] = acc + pack[pb + o]
+                src, size = dst, n_out
+                continue
+            if code == 1:  # layernorm
+                mean = 0.0
+                for i in range(size):
+                    mean += h[i]
+                mean /= size
+                var = 0.0
+                for i in range(size):
+                    c = h[i] - mean
+                    var += c * c
+                inv_std = 1.0 / np.sqrt(var / size + pack[pc])
+                for i in range(size):
+                    v = (h[i] - mean) * inv_std
+                    y[i] = v * pack[pw + i] + pack[pb + i] if pw >= 0 else v
+            elif code == 2:
+                for i in range(size):
+                    y[i] = np.tanh(h[i])
+            elif code == 3:
+                for i in range(size):
+                    y[i] = max(h[i], 0.0)
+            else:
+                slope = pack[pc]
+                for i in range(size):
+                    v = h[i]
+                    y[i] = v if v > 0.0 else slope * v
+            src = dst
+        return src
+
+    @numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
+    def scaled_input(x, pack, meta, scratch):  # type: ignore[no-untyped-def]  # pragma: no cover
+        # The scaled inputs into scratch[0, :d]; False for an observation with NaN or inf.
+        d, fa, fb = meta[N_INPUTS], meta[N_FEATURE_A], meta[N_FEATURE_B]
         total = 0.0
         for i in range(d):
             total += x[i] * x[i]
         if not np.isfinite(total):
-            return -1, 0
+            return False
         for i in range(d):
             scratch[0, i] = x[i] * pack[fa + i] - pack[fb + i]
-        for net in range(n_networks):
-            r = records + net * n_net
-            if meta[r + 2] == 0:
-                continue
-            src, size = 0, d
-            for layer in range(meta[r + 3], meta[r + 3] + meta[r + 4]):
-                q = layer_base + layer * n_layer
-                code, n_out, pw, pb, pc = meta[q], meta[q + 2], meta[q + 3], meta[q + 4], meta[q + 5]
-                dst = 1 if src != 1 else 2
-                h, y = scratch[src], scratch[dst]  # 1-D views: contiguous loops that LLVM vectorises
-                if code == 0:  # linear
-                    weight = pack[pw : pw + n_out * size]
-                    for o in range(n_out):
-                        row = weight[o * size : (o + 1) * size]
-                        acc = 0.0
-                        for i in range(size):
-                            acc += row[i] * h[i]
-                        y[o] = acc + pack[pb + o]
-                    src, size = dst, n_out
-                    continue
-                if code == 1:  # layernorm
-                    mean = 0.0
-                    for i in range(size):
-                        mean += h[i]
-                    mean /= size
-                    var = 0.0
-                    for i in range(size):
-                        c = h[i] - mean
-                        var += c * c
-                    inv_std = 1.0 / np.sqrt(var / size + pack[pc])
-                    for i in range(size):
-                        v = (h[i] - mean) * inv_std
-                        y[i] = v * pack[pw + i] + pack[pb + i] if pw >= 0 else v
-                elif code == 2:
-                    for i in range(size):
-                        y[i] = np.tanh(h[i])
-                elif code == 3:
-                    for i in range(size):
-                        y[i] = max(h[i], 0.0)
-                else:
-                    slope = pack[pc]
-                    for i in range(size):
-                        v = h[i]
-                        y[i] = v if v > 0.0 else slope * v
-                src = dst
-            for j in range(meta[r + 1] - meta[r]):
-                out[meta[r] + j] = scratch[src, j]
+        return True
+
+    @numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
+    def decide(pack, meta, out, params):  # type: ignore[no-untyped-def]  # pragma: no cover
+        # The first maximum of out[:K], and its type's parameters unscaled into params.
+        n_types, plow, phigh = meta[N_TYPES], meta[N_PARAM_LOW], meta[N_PARAM_HIGH]
         k, best = 0, out[0]
         for a in range(1, n_types):
             if out[a] > best:
                 k, best = a, out[a]
-        start, dim = meta[offsets + k], meta[offsets + k + 1] - meta[offsets + k]
+        start, dim = meta[n_fields + k], meta[n_fields + k + 1] - meta[n_fields + k]
         for j in range(dim):
             params[j] = unscale_one(out[n_types + start + j], pack[plow + start + j], pack[phigh + start + j])
         return k, dim
 
-    return act_network_kernel
+    @numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
+    def act_network_kernel(x, pack, meta, scratch, out, params):  # type: ignore[no-untyped-def]  # pragma: no cover
+        # scratch: (3, width) float64; row 0 holds the scaled input, rows 1 and 2 a network's layers in turn.
+        if not scaled_input(x, pack, meta, scratch):
+            return -1, 0
+        records = n_fields + meta[N_TYPES] + 1
+        for net in range(meta[N_NETWORKS]):
+            r = records + net * n_net
+            if meta[r + 2] == 0:
+                continue
+            src = run_network(pack, meta, net, scratch)
+            for j in range(meta[r + 1] - meta[r]):
+                out[meta[r] + j] = scratch[src, j]
+        return decide(pack, meta, out, params)
+
+    @numba.njit(cache=True, nogil=True, fastmath={"reassoc"})
+    def act_pdqn_kernel(x, pack, meta, scratch, out, params):  # type: ignore[no-untyped-def]  # pragma: no cover
+        # scratch: (3, width) float64; row 0 holds [x, p], the Q network's input, rows 1 and 2 a network's layers.
+        if not scaled_input(x, pack, meta, scratch):
+            return -1, 0
+        d, n_types = meta[N_INPUTS], meta[N_TYPES]
+        offsets = n_fields
+        n_params = meta[offsets + n_types]
+        src = run_network(pack, meta, 0, scratch)  # the parameter actor
+        for j in range(n_params):
+            out[n_types + j] = scratch[src, j]
+            scratch[0, d + j] = scratch[src, j]
+        if meta[N_MULTI_PASS] == 0:
+            src = run_network(pack, meta, 1, scratch)
+            for a in range(n_types):
+                out[a] = scratch[src, a]
+        else:  # pass a: only type a's parameters
+            for a in range(n_types):
+                for j in range(n_params):
+                    owned = meta[offsets + a] <= j < meta[offsets + a + 1]
+                    scratch[0, d + j] = out[n_types + j] if owned else 0.0
+                src = run_network(pack, meta, 1, scratch)
+                out[a] = scratch[src, a]
+        return decide(pack, meta, out, params)
+
+    return act_network_kernel, act_pdqn_kernel
 
 
-_NETWORK_KERNEL: Any = False  # compiled on first use
+_NETWORK_KERNELS: Any = False  # compiled on first use
+
+
+def _network_kernels() -> tuple[Any, Any] | None:
+    global _NETWORK_KERNELS
+    if _NETWORK_KERNELS is False:
+        _NETWORK_KERNELS = _compile_network_kernels()
+    return _NETWORK_KERNELS  # type: ignore[no-any-return]
 
 
 def network_kernel() -> Any:
@@ -302,7 +360,12 @@ def network_kernel() -> Any:
     ``network_kernel()(x, pack, meta, scratch, out, params) -> (k, dim)`` with the arguments of
     :func:`network_kernel_arguments`, ``scratch`` ``(3, width)`` and ``out`` ``(A,)`` float64 buffers: the chosen
     0-based type ``k`` (-1 for an observation with NaN or inf) and its parameters in ``params[:dim]``."""
-    global _NETWORK_KERNEL
-    if _NETWORK_KERNEL is False:
-        _NETWORK_KERNEL = _compile_network_kernel()
-    return _NETWORK_KERNEL
+    kernels = _network_kernels()
+    return None if kernels is None else kernels[0]
+
+
+def pdqn_kernel() -> Any:
+    """The compiled kernel of a ``pdqn`` head, or None without numba; called as :func:`network_kernel`'s (with the
+    :func:`network_kernel_arguments` of a :class:`~sb3_aac.runtime.forward.PDQNForward`)."""
+    kernels = _network_kernels()
+    return None if kernels is None else kernels[1]

@@ -1,6 +1,6 @@
 """
-:class:`RuntimePolicy`: greedy SarsaAAC decisions from an exported ``.aacp`` file, with numpy alone (and numba,
-when importable, for one observation at a time).
+:class:`RuntimePolicy`: greedy decisions (SarsaAAC, HybridPPO's mode, P-DQN / MP-DQN) from an exported ``.aacp`` file,
+with numpy alone (and numba, when importable, for one observation at a time).
 """
 
 from __future__ import annotations
@@ -14,19 +14,20 @@ import numpy as np
 
 from .actions import env_action, unscale, unscale_value
 from .format import BANK_ARRAYS, TILE_ARRAYS, check_array_values, read_policy_file
-from .forward import BankForward, NetworkForward, TileForward
-from .kernel import act_kernel, kernel_arguments, network_kernel, network_kernel_arguments
+from .forward import BankForward, NetworkForward, PDQNForward, TileForward
+from .kernel import act_kernel, kernel_arguments, network_kernel, network_kernel_arguments, pdqn_kernel
 
 BACKENDS = ("auto", "numpy", "numba")  # how act() computes: numba if importable, or numpy only
 
 
 class RuntimePolicy:
     """
-    A SarsaAAC policy read from an exported file: greedy decisions with numpy only.
+    A policy read from an exported file: greedy decisions with numpy only.
 
     ``act`` follows the paper's decision procedure (Uc-Cetina 2013, Sec. 4.3): the K action-type values, their
     maximum, then the parameters of the chosen type only, so one decision costs ``O(n)`` in the number of
-    features. Use :meth:`load` to build one.
+    features. A P-DQN / MP-DQN file (``pdqn`` head) computes every type's parameters first, since its Q values read
+    them. Use :meth:`load` to build one.
 
     :ivar n_types: number of action types K
     :ivar type_start: the env's number for type 0 (``Discrete.start``; 0 for ``OneOf``)
@@ -60,13 +61,13 @@ class RuntimePolicy:
         self._bounds_lists = [(self.param_low[s].tolist(), self.param_high[s].tolist()) for s in slices]
         self._kernel_args: tuple[np.ndarray, ...] | None = None
         self._lock = threading.Lock()  # act() reuses the buffers below
-        if approx["head"]["type"] == "networks":
+        if approx["head"]["type"] in ("networks", "pdqn"):
             self._init_networks(approx, arrays, backend)
             return
         if self.tiles:
             if backend == "numba":
                 raise ValueError("backend='numba' computes dense features only; tile-coding policies run with numpy ('auto')")
-            self._bank: BankForward | TileForward | NetworkForward = TileForward(
+            self._bank: BankForward | TileForward | NetworkForward | PDQNForward = TileForward(
                 **{name: arrays[name] for name in TILE_ARRAYS}
             )
             self.rbf = self.mlp = False
@@ -89,13 +90,18 @@ class RuntimePolicy:
         self.backend = "numpy" if self._kernel_args is None else "numba"
 
     def _init_networks(self, approx: dict[str, Any], arrays: dict[str, np.ndarray], backend: str) -> None:
-        """Set up a ``networks`` head: :class:`NetworkForward`, and the numba kernel unless ``backend="numpy"``."""
-        self._bank = net = NetworkForward(
-            arrays["obs_mid"], arrays["obs_half"], approx["head"]["networks"], arrays, approx["n_outputs"]
-        )
+        """Set up a ``networks`` or ``pdqn`` head: :class:`NetworkForward` or :class:`PDQNForward`, and the numba kernel
+        unless ``backend="numpy"``."""
+        head = approx["head"]
+        net: NetworkForward | PDQNForward
+        if head["type"] == "pdqn":
+            net = PDQNForward(arrays["obs_mid"], arrays["obs_half"], head, arrays, self.offsets)
+        else:
+            net = NetworkForward(arrays["obs_mid"], arrays["obs_half"], head["networks"], arrays, approx["n_outputs"])
+        self._bank = net
         self.rbf = self.mlp = False
         if backend != "numpy":
-            kernel = network_kernel()
+            kernel = pdqn_kernel() if head["type"] == "pdqn" else network_kernel()
             if kernel is None and backend == "numba":
                 raise ValueError("backend='numba' needs numba (pip install numba); use backend='numpy' or 'auto'")
             if kernel is not None:
@@ -176,7 +182,7 @@ class RuntimePolicy:
             if k < 0:
                 raise ValueError(f"The observation holds NaN or inf values: {x}")
             return self.type_start + k, self._params_buffer[:dim].astype(self.param_dtypes[k])
-        if isinstance(self._bank, (TileForward, NetworkForward)):
+        if isinstance(self._bank, (TileForward, NetworkForward, PDQNForward)):
             out = self._bank.outputs(self._bank.features(self._observation(obs)[None]))[0][0].tolist()
         else:
             phi = self._bank.features(self._observation(obs), out=self._feature_buffer)
@@ -235,7 +241,7 @@ class RuntimePolicy:
         return k + self.type_start, self.unscale(out[:, self._p_slice])
 
     def value(self, obs: Any) -> np.ndarray:
-        """The critic's state values ``V(s)`` for a batch ``(n,)``."""
+        """The critic's state values ``V(s)`` for a batch ``(n,)`` (P-DQN / MP-DQN: ``max_k Q_k``, the greedy value)."""
         return self.outputs(obs)[:, -1]
 
     # ------------------------------------------------------------------ SB3-style predict

@@ -3,13 +3,14 @@
  *
  * One C99 header with no dependency beyond the C standard library (and libm: link with -lm). It reads
  * every file the Python reference reader (`sb3_aac.runtime.RuntimePolicy`) reads: format `sb3-aac-policy`
- * versions 2 and 3, scaled-input or Gaussian-RBF features (with or without the RBF window) under a linear or
- * one-tanh-layer head, tile coding, and (version 3) the feed-forward networks of a DeepPolicy (linear, layer-norm
- * and tanh/relu/leaky-relu layers). It checks a file as that reader does (length, magic bytes, SHA-256,
- * strict UTF-8 JSON header, format and version, every field and array, finite values) and never reads past
- * the buffer it is given; then `aacp_act` returns the decision `RuntimePolicy.act` returns: the same action
- * type, and that type's parameters in the env's units (clipped to their bounds) within 1e-5. The file
- * format is docs/export-format.md of sb3-aac; `sb3-aac c-header` prints where this header is installed.
+ * versions 2 to 4, scaled-input or Gaussian-RBF features (with or without the RBF window) under a linear or
+ * one-tanh-layer head, tile coding, (version 3) the feed-forward networks of a DeepPolicy or HybridPPO (linear,
+ * layer-norm and tanh/relu/leaky-relu layers), and (version 4) P-DQN's and MP-DQN's parameter actor and Q
+ * network. It checks a file as that reader does (length, magic bytes, SHA-256, strict UTF-8 JSON header, format
+ * and version, every field and array, finite values) and never reads past the buffer it is given; then
+ * `aacp_act` returns the decision `RuntimePolicy.act` returns: the same action type, and that type's parameters
+ * in the env's units (clipped to their bounds) within 1e-5. The file format is docs/export-format.md of sb3-aac;
+ * `sb3-aac c-header` prints where this header is installed.
  *
  * Use (single-header style): include it anywhere for the declarations, and in exactly one C or C++ file
  *
@@ -717,7 +718,7 @@ static int64_t aacp__shape_product(const aacp__json *j, long i, int64_t minimum)
 /* ------------------------------------------------------------------------------------------ header checks */
 
 enum { AACP__SCALED, AACP__RBF, AACP__TILES };
-enum { AACP__LINEAR, AACP__TANH_MLP, AACP__NETWORKS };
+enum { AACP__LINEAR, AACP__TANH_MLP, AACP__NETWORKS, AACP__PDQN };
 enum { AACP__LAYER_LINEAR, AACP__LAYER_NORM, AACP__LAYER_TANH, AACP__LAYER_RELU, AACP__LAYER_LEAKY_RELU };
 
 typedef struct aacp__array_spec {
@@ -744,7 +745,8 @@ typedef struct aacp__spec {
     int features, head, layout;
     double window_z2; /* features with z*z above this are 0 (INFINITY: no window) */
     int64_t *offsets; /* K + 1 parameter offsets */
-    int version3;     /* the file's version is 3 */
+    int version;      /* the file's version: 2, 3 or 4 */
+    int multi_pass;   /* a pdqn head: MP-DQN's K passes */
     long arrays;      /* the header's arrays table */
     int n_arrays, cap_arrays;
     aacp__array_spec *array;
@@ -811,7 +813,7 @@ static int aacp__expected_arrays(aacp__spec *s) {
         bad |= aacp__add_array(s, "tile_bases", 1, s->c, 0, 0);
         bad |= aacp__add_array(s, "tile_weight", 2, s->f, s->a, 0);
         bad |= aacp__add_array(s, "bias", 1, s->a, 0, 0);
-    } else if (s->head == AACP__NETWORKS) { /* layer l of network i: net{i}_{l}_weight, net{i}_{l}_bias */
+    } else if (s->head == AACP__NETWORKS || s->head == AACP__PDQN) { /* layer l of network i: net{i}_{l}_weight/bias */
         for (i = 0; i < s->n_networks; i++)
             for (l = 0; l < s->networks[i].count; l++) {
                 const aacp__layer_spec *layer = &s->layers[s->networks[i].first + l];
@@ -903,15 +905,28 @@ head:
             return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "hidden_units=%s", aacp__show(j, units, b1, sizeof b1));
         s->head = AACP__TANH_MLP;
     } else if (aacp__string_is(j, head_type, "networks")) {
-        if (!s->version3 || s->features != AACP__SCALED)
+        if (s->version < 3 || s->features != AACP__SCALED)
             return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "a networks head needs version >= 3 and scaled features");
         if (aacp__need(c, head, "networks", "approximators.head.networks") < 0)
             return AACP_ERR_HEADER;
         s->head = AACP__NETWORKS;
+    } else if (aacp__string_is(j, head_type, "pdqn")) {
+        long multi_pass;
+        if (s->version < 4 || s->features != AACP__SCALED)
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "a pdqn head needs version >= 4 and scaled features");
+        if ((multi_pass = aacp__need(c, head, "multi_pass", "approximators.head.multi_pass")) < 0)
+            return AACP_ERR_HEADER;
+        if (!aacp__is(j, multi_pass, AACP__TRUE) && !aacp__is(j, multi_pass, AACP__FALSE))
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "a pdqn head's multi_pass must be true or false, got %s",
+                             aacp__show(j, multi_pass, b2, sizeof b2));
+        if (aacp__need(c, head, "networks", "approximators.head.networks") < 0)
+            return AACP_ERR_HEADER;
+        s->head = AACP__PDQN, s->multi_pass = aacp__is(j, multi_pass, AACP__TRUE);
     } else if (aacp__string_is(j, head_type, "linear"))
         s->head = AACP__LINEAR;
     else
-        return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "unknown head type %s (known: 'linear', 'tanh_mlp', 'networks')",
+        return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
+                         "unknown head type %s (known: 'linear', 'tanh_mlp', 'networks', 'pdqn')",
                          aacp__show(j, head_type, b2, sizeof b2));
     return AACP_OK;
 }
@@ -982,13 +997,18 @@ norm:
 }
 
 /* A networks head (Python: check_networks): feed-forward networks reading the D scaled inputs, whose columns cover
-   the A outputs exactly once. */
+   the A outputs exactly once. A pdqn head (Python: check_pdqn_head): two networks, the parameter actor reading the
+   D scaled inputs and writing the columns [K, K + P], then the Q network reading D + P values and writing [0, K]. */
 static int aacp__check_networks(aacp__ctx *c, aacp__spec *s, long networks) {
     aacp__json *j = c->j;
     aacp__network_spec *sorted;
     size_t i, n_layers = 0;
     long net, layer;
     int64_t covered = 0;
+    int pdqn = s->head == AACP__PDQN;
+    if (pdqn && (!aacp__is(j, networks, AACP__ARRAY) || j->nodes[networks].count != 2))
+        return aacp__bad(c->error, c->name, AACP_ERR_HEADER,
+                         "a pdqn head holds two networks (the parameter actor, then the Q network)");
     if (!aacp__is(j, networks, AACP__ARRAY) || j->nodes[networks].count == 0)
         return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "networks must be a non-empty list");
     for (net = j->nodes[networks].child; net >= 0; net = j->nodes[net].next) {
@@ -1003,15 +1023,16 @@ static int aacp__check_networks(aacp__ctx *c, aacp__spec *s, long networks) {
     for (i = 0, net = j->nodes[networks].child; net >= 0; net = j->nodes[net].next, i++) {
         aacp__network_spec *spec = &s->networks[i];
         long columns = aacp__need(c, net, "columns", "approximators.head.networks[].columns"), layers;
-        int64_t size = s->d, l = 0;
+        int64_t size = pdqn && i == 1 ? aacp__add(s->d, s->n_params) : s->d, l = 0; /* the Q network reads [x, p] */
+        int64_t n_outputs = pdqn ? aacp__add(aacp__add(s->k, s->n_params), 1) : s->a;
         if (columns < 0)
             return AACP_ERR_HEADER;
         if (!aacp__is(j, columns, AACP__ARRAY) || j->nodes[columns].count != 2 ||
             !aacp__whole(j, j->nodes[columns].child, 0, &spec->start) ||
             !aacp__whole(j, j->nodes[j->nodes[columns].child].next, 0, &spec->stop) || !(spec->start < spec->stop) ||
-            spec->stop > s->a)
+            spec->stop > n_outputs)
             return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "network %lu: columns must be [start, stop) within [0, %lld]",
-                             (unsigned long)i, (long long)s->a);
+                             (unsigned long)i, (long long)n_outputs);
         if ((layers = aacp__need(c, net, "layers", "approximators.head.networks[].layers")) < 0)
             return AACP_ERR_HEADER;
         if (!aacp__is(j, layers, AACP__ARRAY))
@@ -1023,7 +1044,14 @@ static int aacp__check_networks(aacp__ctx *c, aacp__spec *s, long networks) {
         if (size != spec->stop - spec->start)
             return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "network %lu ends with %lld values for its %lld columns",
                              (unsigned long)i, (long long)size, (long long)(spec->stop - spec->start));
+        if (pdqn && (i == 0 ? spec->start != s->k || spec->stop != aacp__add(s->k, s->n_params)
+                            : spec->start != 0 || spec->stop != s->k))
+            return aacp__bad(c->error, c->name, AACP_ERR_HEADER, "network %lu of a pdqn head writes the columns [%lld, %lld]",
+                             (unsigned long)i, (long long)(i == 0 ? s->k : 0),
+                             (long long)(i == 0 ? s->k + s->n_params : s->k));
     }
+    if (pdqn)
+        return AACP_OK; /* V = max Q: no network writes it */
     /* Each output exactly once: sorted by start, the ranges must tile [0, A). */
     sorted = (aacp__network_spec *)aacp__alloc(s->n_networks, sizeof *sorted);
     if (!sorted)
@@ -1136,12 +1164,13 @@ static int aacp__check_header(aacp__ctx *c, aacp__spec *s) {
     if (!aacp__string_is(j, format, AACP_FORMAT_NAME))
         return aacp__bad(c->error, c->name, AACP_ERR_FORMAT, "format is %s, expected '%s'",
                          aacp__show(j, format, b1, sizeof b1), AACP_FORMAT_NAME);
-    if (!aacp__equals(j, version, 2) && !aacp__equals(j, version, 3))
+    for (s->version = 2; s->version <= 4 && !aacp__equals(j, version, s->version); s->version++)
+        ;
+    if (s->version > 4)
         return aacp__bad(c->error, c->name, AACP_ERR_FORMAT,
-                         "unknown format version %s; this reader supports [2, 3] "
+                         "unknown format version %s; this reader supports [2, 3, 4] "
                          "(a newer sb3-aac wrote it? use a newer aacp.h)",
                          aacp__show(j, version, b1, sizeof b1));
-    s->version3 = aacp__equals(j, version, 3); /* a networks head needs version >= 3 */
     if ((obs = aacp__need(c, 0, "observation", "observation")) < 0 || (action = aacp__need(c, 0, "action", "action")) < 0 ||
         (approx = aacp__need(c, 0, "approximators", "approximators")) < 0 ||
         (size = aacp__need(c, obs, "size", "observation.size")) < 0 ||
@@ -1163,7 +1192,8 @@ static int aacp__check_header(aacp__ctx *c, aacp__spec *s) {
                          aacp__show(j, n_features, b1, sizeof b1), aacp__show(j, n_outputs, b2, sizeof b2));
     if ((code = aacp__check_features_and_head(c, s, features, head)) != AACP_OK)
         return code;
-    if (s->head == AACP__NETWORKS && (code = aacp__check_networks(c, s, aacp__member(j, head, "networks"))) != AACP_OK)
+    if ((s->head == AACP__NETWORKS || s->head == AACP__PDQN) &&
+        (code = aacp__check_networks(c, s, aacp__member(j, head, "networks"))) != AACP_OK)
         return code;
     if ((outputs = aacp__need(c, approx, "outputs", "approximators.outputs")) < 0)
         return AACP_ERR_HEADER;
@@ -1260,12 +1290,13 @@ struct aacp_policy {
     int64_t *tile_strides;    /* (C, k) */
     int64_t *tile_bases;      /* (C) */
     double *tile_weight;      /* (F, A) */
-    size_t n_networks, n_layers, width; /* networks head: the widest layer (or D) */
+    size_t n_networks, n_layers, width; /* networks and pdqn heads: the widest layer (or D) */
+    int multi_pass;           /* pdqn head: MP-DQN's K passes */
     aacp__network *networks;
     aacp__layer *layers;
     double *h0, *h1;          /* scratch: a layer's input and output (width values each) */
     unsigned char *computed;  /* scratch: networks evaluated for this decision */
-    double *phi;              /* scratch: features that are not 0 */
+    double *phi;              /* scratch: features that are not 0 (pdqn: the Q network's input [x, p]) */
     size_t *active;           /* scratch: their indices (tiles: each coding's active feature) */
     double *outputs;          /* scratch: K outputs, then the chosen type's scaled parameters */
     double *params;           /* scratch: the chosen type's parameters */
@@ -1398,7 +1429,8 @@ static int aacp__check_values(aacp__ctx *c, const aacp__spec *s, const unsigned 
 
 static double *aacp__array(const aacp__spec *s, const unsigned char *blob, const char *name, size_t *count);
 
-/* A networks head (NetworkForward): the scaled inputs' constants, each layer and its arrays; 0, or -1 out of memory. */
+/* A networks or pdqn head (NetworkForward, PDQNForward): the scaled inputs' constants, each layer and its arrays; 0, or
+   -1 out of memory. */
 static int aacp__build_networks(const aacp__spec *s, const unsigned char *blob, aacp_policy *p, const double *mid,
                                 const double *half) {
     size_t i, l;
@@ -1408,7 +1440,9 @@ static int aacp__build_networks(const aacp__spec *s, const unsigned char *blob, 
     p->feature_a = (double *)aacp__alloc(p->d, sizeof *p->feature_a);
     p->feature_b = (double *)aacp__alloc(p->d, sizeof *p->feature_b);
     p->computed = (unsigned char *)aacp__alloc(s->n_networks, 1);
-    p->phi = (double *)aacp__alloc(p->d, sizeof *p->phi); /* the scaled inputs */
+    p->multi_pass = s->multi_pass;
+    /* the scaled inputs (pdqn: then the actor's P parameters, the Q network's input) */
+    p->phi = (double *)aacp__alloc(p->d + (s->head == AACP__PDQN ? p->n_params : 0), sizeof *p->phi);
     if (!p->networks || !p->layers || !p->feature_a || !p->feature_b || !p->computed || !p->phi)
         return -1;
     for (i = 0; i < p->d; i++) { /* NetworkForward: a = 1 / half, b = mid * a */
@@ -1493,7 +1527,7 @@ static int aacp__build(aacp__ctx *c, const aacp__spec *s, const unsigned char *b
         free(inputs), free(offsets), free(strides), free(bases);
         if (!ok)
             goto nomem;
-    } else if (s->head == AACP__NETWORKS) {
+    } else if (s->head == AACP__NETWORKS || s->head == AACP__PDQN) {
         if (aacp__build_networks(s, blob, p, mid, half) != 0)
             goto nomem;
     } else {
@@ -1815,12 +1849,12 @@ static void aacp__tile_outputs(const aacp_policy *p, size_t first, size_t count,
         out[a] += p->b[first + a];
 }
 
-/* Network i on the scaled inputs x (NetworkForward.network): its values go to outputs[start .. stop). */
-static void aacp__network_outputs(aacp_policy *p, size_t i, const double *x) {
+/* Network i on its n inputs x (ScaledNetworks.network): its last layer's values (in h0 or h1, or x itself). */
+static const double *aacp__run_network(aacp_policy *p, size_t i, const double *x, size_t n) {
     const aacp__network *net = &p->networks[i];
     const double *h = x;
     double *out = p->h0;
-    size_t n = p->d, l, o, k;
+    size_t l, o, k;
     for (l = 0; l < net->count; l++) {
         const aacp__layer *layer = &p->layers[net->first + l];
         if (layer->kind == AACP__LAYER_LINEAR) {
@@ -1856,7 +1890,31 @@ static void aacp__network_outputs(aacp_policy *p, size_t i, const double *x) {
         h = out; /* the next layer reads this one's values and writes the other buffer */
         out = out == p->h0 ? p->h1 : p->h0;
     }
-    memcpy(p->outputs + net->start, h, (net->stop - net->start) * sizeof *h);
+    return h;
+}
+
+/* Network i of a networks head on the scaled inputs x (NetworkForward): its values go to outputs[start .. stop). */
+static void aacp__network_outputs(aacp_policy *p, size_t i, const double *x) {
+    const aacp__network *net = &p->networks[i];
+    memcpy(p->outputs + net->start, aacp__run_network(p, i, x, p->d), (net->stop - net->start) * sizeof *x);
+}
+
+/* A pdqn head (PDQNForward) on the scaled inputs in phi[0 .. D): the actor's P parameters into outputs[K .. K + P)
+   and phi[D .. D + P), then Q into outputs[0 .. K): one pass, or pass k with only type k's parameters, giving Q_k. */
+static void aacp__pdqn_outputs(aacp_policy *p) {
+    size_t jj, k, n_in = p->d + p->n_params;
+    double *x = p->outputs + p->k;
+    memcpy(x, aacp__run_network(p, 0, p->phi, p->d), p->n_params * sizeof *x);
+    if (!p->multi_pass) {
+        memcpy(p->phi + p->d, x, p->n_params * sizeof *x);
+        memcpy(p->outputs, aacp__run_network(p, 1, p->phi, n_in), p->k * sizeof *x);
+        return;
+    }
+    for (k = 0; k < p->k; k++) {
+        for (jj = 0; jj < p->n_params; jj++)
+            p->phi[p->d + jj] = jj >= p->offsets[k] && jj < p->offsets[k + 1] ? x[jj] : 0.0;
+        p->outputs[k] = aacp__run_network(p, 1, p->phi, n_in)[k];
+    }
 }
 
 /* Evaluate every network not yet computed that writes one of the outputs [first, stop). */
@@ -1879,7 +1937,7 @@ static double aacp__unscale(double scaled, double low, double high) {
 static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_error *error) {
     size_t i, jj, n = 0, k = 0, dim, start;
     double total = 0.0, best;
-    int tiles = p->features == AACP__TILES, networks = p->head == AACP__NETWORKS;
+    int tiles = p->features == AACP__TILES, networks = p->head == AACP__NETWORKS, pdqn = p->head == AACP__PDQN;
     for (i = 0; i < p->d; i++)
         total += x[i] * x[i];
     if (!isfinite(total)) /* one reduction, as RuntimePolicy: NaN, inf (and absurd magnitudes) reach the sum */
@@ -1905,11 +1963,15 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
             }
             p->active[i] = (size_t)feature;
         }
-    } else if (networks) { /* the scaled inputs, x * a - b */
+    } else if (networks || pdqn) { /* the scaled inputs, x * a - b */
         for (i = 0; i < p->d; i++)
             p->phi[i] = x[i] * p->feature_a[i] - p->feature_b[i];
-        memset(p->computed, 0, p->n_networks);
-        aacp__networks_for(p, 0, p->k, p->phi); /* the networks that write Q */
+        if (pdqn)
+            aacp__pdqn_outputs(p); /* Q needs every type's parameters */
+        else {
+            memset(p->computed, 0, p->n_networks);
+            aacp__networks_for(p, 0, p->k, p->phi); /* the networks that write Q */
+        }
     } else if (p->m) {
         for (i = 0; i < p->d; i++)
             for (jj = 0; jj < p->m; jj++) {
@@ -1929,7 +1991,7 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
     }
     if (tiles)
         aacp__tile_outputs(p, 0, p->k, p->outputs);
-    else if (!networks)
+    else if (!networks && !pdqn)
         for (i = 0; i < p->k; i++)
             p->outputs[i] = aacp__output(p, i, n);
     for (i = 1, best = p->outputs[0]; i < p->k; i++) /* the first maximum */
@@ -1938,8 +2000,9 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
     start = p->offsets[k], dim = p->offsets[k + 1] - start;
     if (tiles)
         aacp__tile_outputs(p, p->k + start, dim, p->outputs);
-    else if (networks) { /* the networks that write the chosen type's parameters, moved to the front */
-        aacp__networks_for(p, p->k + start, p->k + start + dim, p->phi);
+    else if (networks || pdqn) { /* the chosen type's parameters (computed already for pdqn), moved to the front */
+        if (networks)
+            aacp__networks_for(p, p->k + start, p->k + start + dim, p->phi);
         memmove(p->outputs, p->outputs + p->k + start, dim * sizeof *p->outputs);
     } else
         for (jj = 0; jj < dim; jj++)
