@@ -1,7 +1,9 @@
 """Shared test constants, the registry of algorithms the feature tests run, and tiny envs."""
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
+import math
 
 import gymnasium as gym
 import numpy as np
@@ -17,6 +19,8 @@ POLICIES = ["MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy", "DeepPolicy"
 LAYOUTS = ["nested", "flat", "shared", "oneof"]
 # P-DQN / MP-DQN small and fast: learning from step 50 on minibatches of 16, one hidden layer of 16.
 PDQN_SMALL = dict(learning_starts=50, batch_size=16, policy_kwargs=dict(net_arch=[16]))
+# HybridPPO small and fast: rollouts of 16 steps per lane, two epochs over minibatches of 16, hidden layers of 16.
+HPPO_SMALL = dict(n_steps=16, batch_size=16, n_epochs=2, policy_kwargs=dict(net_arch=[16]))
 
 
 @dataclass(frozen=True)
@@ -29,6 +33,11 @@ class Algo:
     kwargs: dict[str, Any] = field(default_factory=dict)  # small, fast settings for tests
     own_tags: tuple[str, ...] = ()  # the log keys of its own (besides tests/test_logging.py's COMMON_TAGS)
     log_often: dict[str, Any] = field(default_factory=dict)  # settings under which log_interval alone sets the dumps
+    on_policy: bool = False  # whether it collects whole rollouts of n_steps per lane (kwargs' n_steps) between updates
+    value_stats: str = "train/q"  # the prefix of its critic's value statistics (common.action_stats.ActionStats)
+    # A hyperparameter that _setup_model turns into a schedule, and the value the model uses at the end of a learn:
+    # loading with another value of the hyperparameter must change it.
+    rebuilt: tuple[str, Callable[[Any], float]] = ("exploration_final_eps", lambda model: model.exploration_rate)
 
     @property
     def id(self) -> str:
@@ -38,23 +47,70 @@ class Algo:
         """The algorithm on ``env`` with the case's policy and settings, ``kwargs`` on top."""
         return self.algo(self.policy, env, **{**self.kwargs, **kwargs})
 
+    @property
+    def rollout(self) -> dict[str, int]:
+        """The settings that fix how many steps per lane it collects between updates (a run keeps them over a
+        sampler's draws): an on-policy algorithm's ``n_steps``, nothing for one that updates between single steps."""
+        return {"n_steps": self.kwargs["n_steps"]} if self.on_policy else {}
 
+    @property
+    def rollout_steps(self) -> int:
+        """Env steps per lane collected between updates."""
+        return self.rollout.get("n_steps", 1)
+
+    def cli_settings(self) -> list[str]:
+        """The case's settings as ``sb3-aac train`` options (``--set key=value``)."""
+        return [arg for key, value in self.kwargs.items() for arg in ("--set", f"{key}={value!r}")]
+
+    def timesteps(self, budget: int, n_envs: int = 1, start: int = 0) -> int:
+        """
+        ``num_timesteps`` after ``learn(budget)`` from ``start`` on ``n_envs`` lanes, unless a callback stops it: the
+        algorithm collects ``rollout_steps`` steps of every lane at a time, so it runs on to the first multiple of
+        ``rollout_steps * n_envs`` steps at or beyond the budget (as SB3's PPO and DQN do).
+        """
+        chunk = self.rollout_steps * n_envs
+        return start + math.ceil(budget / chunk) * chunk
+
+
+# The keys of the algorithms that explore with a decaying epsilon and name their critic's loss critic_loss.
+_EPSILON_TAGS = ("rollout/exploration_rate", "train/critic_loss")
 _SARSA_AAC_TAGS = (
     *("rollout/type_freq_1", "train/td_error_abs_mean", "train/q_loss", "train/param_update_fraction", "train/param_noise"),
+    *_EPSILON_TAGS,
 )
-_PDQN_TAGS = ("train/actor_loss", "train/learning_rate", "train/actor_learning_rate")
-# Algorithms not (yet) in ALGOS, tested by their own files only: HybridPPO collects whole rollouts, so the feature
-# tests' exact step counts do not hold for it (tests/test_hppo_*.py cover its save/load, runs, logging and export).
-OWN_TESTS_ONLY = {"hppo": HybridPPO}  # name (as ALGOS' cli) -> class
+_PDQN_TAGS = ("train/actor_loss", "train/learning_rate", "train/actor_learning_rate", *_EPSILON_TAGS)
+_HPPO_TAGS = (
+    *("train/policy_loss_discrete", "train/policy_loss_params", "train/clip_fraction_discrete"),
+    *("train/clip_fraction_params", "train/entropy_discrete", "train/entropy_params", "train/value_loss"),
+    *("train/approx_kl", "train/explained_variance", "train/std", "train/clip_range", "train/clip_range_params"),
+    *("train/learning_rate", "rollout/type_freq_2", "rollout/param_mean_1_1"),
+)
 # Every algorithm, and SarsaAAC with each policy: a new algorithm (or policy) joins the feature tests by one line.
 ALGOS = [
     # RbfPolicy first: the SarsaAAC case of ALGO_CLASSES.
     *(
-        Algo(SarsaAAC, name, "sarsa_aac", own_tags=_SARSA_AAC_TAGS, log_often=dict(log_min_timesteps=0))
+        Algo(
+            SarsaAAC,
+            name,
+            "sarsa_aac",
+            own_tags=_SARSA_AAC_TAGS,
+            log_often=dict(log_min_timesteps=0),
+            value_stats="train/value",
+        )
         for name in ("RbfPolicy", "MlpPolicy", "RbfMlpPolicy", "TilePolicy", "DeepPolicy")
     ),
     Algo(PDQN, "MlpPolicy", "pdqn", PDQN_SMALL, _PDQN_TAGS),
     Algo(MPDQN, "MlpPolicy", "mpdqn", PDQN_SMALL, _PDQN_TAGS),
+    Algo(
+        HybridPPO,
+        "MlpPolicy",
+        "hppo",
+        HPPO_SMALL,
+        _HPPO_TAGS,
+        on_policy=True,
+        value_stats="train/value",
+        rebuilt=("clip_range", lambda model: model.clip_range_schedule(model._current_progress_remaining)),
+    ),
 ]
 # One case per algorithm class (the first listed), for the tests of what the policy does not change.
 ALGO_CLASSES = [case for i, case in enumerate(ALGOS) if all(other.algo is not case.algo for other in ALGOS[:i])]

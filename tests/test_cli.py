@@ -61,7 +61,7 @@ def test_train_episodes_tensorboard_other_env(tmp_path: Path, capsys) -> None:
 def test_train_every_algorithm(tmp_path: Path, capsys, case) -> None:
     assert main(["train", "--algo", case.cli, "--policy", case.policy, "--env", "sb3_aac/ParameterizedTarget-v0",
                  "--timesteps", "300", "--n-envs", "2", "--eval-episodes", "3", "--out", str(tmp_path),
-                 "--set", "gamma=0.8", "--tensorboard", str(tmp_path / "tb")]) == 0  # fmt: skip
+                 "--set", "gamma=0.8", "--tensorboard", str(tmp_path / "tb"), *case.cli_settings()]) == 0  # fmt: skip
     out = capsys.readouterr().out
     name = case.algo.__name__
     assert f"training {name} {case.policy}" in out and "greedy evaluation over 3 episodes: return" in out

@@ -78,7 +78,7 @@ def test_a_failed_save_keeps_the_earlier_model(case, tmp_path, monkeypatch) -> N
     monkeypatch.undo()
     assert (tmp_path / "model.zip").read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["model.zip"]  # no temporary left
-    assert case.algo.load(tmp_path / "model.zip").num_timesteps == 60
+    assert case.algo.load(tmp_path / "model.zip").num_timesteps == case.timesteps(60)
 
 
 @algos(ALGO_CLASSES)

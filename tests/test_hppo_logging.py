@@ -1,88 +1,41 @@
-"""Callbacks, TensorBoard keys and the progress bar of HybridPPO (SB3's test_callbacks / test_tensorboard shapes)."""
+"""HybridPPO's own callback locals and log dumps (what every algorithm shows and logs is tests/test_logging.py's)."""
 
-import os
+import csv
 
-from stable_baselines3.common.callbacks import (
-    BaseCallback,
-    CallbackList,
-    CheckpointCallback,
-    EvalCallback,
-    StopTrainingOnMaxEpisodes,
-    StopTrainingOnRewardThreshold,
-)
+from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
-from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+from stable_baselines3.common.logger import configure
 
 from sb3_aac import HybridPPO
 from sb3_aac.common.envs import ParameterizedTargetEnv
-
-SMALL = dict(n_steps=32, batch_size=32, n_epochs=2, policy_kwargs=dict(net_arch=[16]))
+from tests.helpers import HPPO_SMALL
 
 
 class LocalsCheck(BaseCallback):
+    """The locals HybridPPO adds: the executed type and clipped scaled parameters, and the sampled packed rows."""
+
     def _on_step(self) -> bool:
-        for name in ("new_obs", "rewards", "dones", "infos", "actions", "k", "params", "packed"):
-            assert name in self.locals, name
-        assert self.locals["actions"].dtype == object and len(self.locals["infos"]) == 2
-        assert self.locals["packed"].shape == (2, 6) and self.locals["params"].shape == (2, 5)
+        k, params, packed = self.locals["k"], self.locals["params"], self.locals["packed"]
+        assert k.shape == (2,) and params.shape == (2, 5) and packed.shape == (2, 6)
+        assert (k == packed[:, 0]).all() and (abs(params) <= 1).all()
         return True
 
 
-def test_callbacks(tmp_path):
-    env = make_vec_env(ParameterizedTargetEnv, n_envs=2)
-    model = HybridPPO("MlpPolicy", env, seed=0, **SMALL)
-    checkpoint = CheckpointCallback(save_freq=32, save_path=str(tmp_path), name_prefix="m")
-    evaluation = EvalCallback(
-        make_vec_env(ParameterizedTargetEnv),
-        callback_on_new_best=StopTrainingOnRewardThreshold(1e9),
-        eval_freq=32,
-        n_eval_episodes=2,
-        best_model_save_path=str(tmp_path),
-    )
-    model.learn(128, callback=CallbackList([checkpoint, evaluation, LocalsCheck()]), progress_bar=True)
-    assert os.path.isfile(tmp_path / "m_128_steps.zip") and os.path.isfile(tmp_path / "best_model.zip")
-    assert evaluation.last_mean_reward > 0
-    HybridPPO.load(tmp_path / "best_model.zip")
+def test_callback_locals_and_progress_bar():
+    model = HybridPPO("MlpPolicy", make_vec_env(ParameterizedTargetEnv, n_envs=2), seed=0, **HPPO_SMALL)
+    model.learn(64, callback=LocalsCheck(), progress_bar=True)
+    assert model.num_timesteps == 64
 
 
-def test_stop_training_on_max_episodes():
-    model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(max_episode_steps=5, loss_threshold=0.0), seed=0, **SMALL)
-    model.learn(10_000, callback=StopTrainingOnMaxEpisodes(max_episodes=3))
-    assert model.num_timesteps == 15  # stopped at the step that ended the third episode
-
-
-def test_tensorboard(tmp_path):
-    model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(), tensorboard_log=str(tmp_path), seed=0, **SMALL)
-    model.learn(64)
-    model.learn(64, reset_num_timesteps=False)
-    assert os.path.isdir(tmp_path / "HybridPPO_1") and not os.path.isdir(tmp_path / "HybridPPO_2")
-    events = EventAccumulator(str(tmp_path / "HybridPPO_1"))
-    events.Reload()
-    tags = set(events.Tags()["scalars"])
-    for tag in (
-        "rollout/ep_rew_mean",
-        "rollout/ep_len_mean",
-        "rollout/type_freq_0",
-        "rollout/type_freq_2",
-        "rollout/param_mean_1_1",
-        "rollout/ep_distance_mean",
-        "train/value_mean",
-        "train/policy_loss_discrete",
-        "train/policy_loss_params",
-        "train/clip_fraction_discrete",
-        "train/clip_fraction_params",
-        "train/entropy_discrete",
-        "train/entropy_params",
-        "train/value_loss",
-        "train/approx_kl",
-        "train/explained_variance",
-        "train/std",
-        "train/clip_range",
-        "train/clip_range_params",
-        "train/learning_rate",
-        "time/fps",
-    ):
-        assert tag in tags, tag
-    shares = [sum(events.Scalars(f"rollout/type_freq_{k}")[-1].value for k in range(3))]
-    assert abs(shares[0] - 1.0) < 1e-6
-    assert events.Scalars("train/value_loss")[-1].step == 128
+def test_each_dump_follows_its_rollouts_update(tmp_path):
+    """A dump's train/ keys are of the update on the rollouts it reports (SB3's PPO dumps before the update: its first
+    dump has none, and a learn's last update waits for the next learn); log_interval counts rollouts; the run ends
+    with a dump of the rollouts since the previous one."""
+    model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(), seed=0, **HPPO_SMALL)  # 16 steps a rollout
+    model.set_logger(configure(str(tmp_path), ["csv"]))
+    model.learn(80, log_interval=2)  # 5 rollouts: dumps after the 2nd, the 4th and (the end) the 5th
+    rows = list(csv.DictReader((tmp_path / "progress.csv").open()))
+    assert [int(row["time/total_timesteps"]) for row in rows] == [32, 64, 80]
+    assert [int(row["time/iterations"]) for row in rows] == [2, 4, 5]
+    assert [int(row["train/n_updates"]) for row in rows] == [4, 8, 10]  # n_epochs = 2 per update
+    assert all(row["train/policy_loss_discrete"] and row["rollout/type_freq_0"] for row in rows)

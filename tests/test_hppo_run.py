@@ -1,34 +1,18 @@
-"""HybridPPO runs with every action layout, the PPO options, any VecEnv and the array path (sb3-contrib's test_run)."""
+"""HybridPPO's own runs: the PPO options, shared actor layers, VecNormalize, truncation bootstraps and the array path
+(every layout, SubprocVecEnv and DribbleVecEnv are tests/test_run.py's, for every algorithm)."""
 
 import numpy as np
 import pytest
 import torch as th
-from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_util import make_vec_env
-from stable_baselines3.common.evaluation import evaluate_policy
-from stable_baselines3.common.vec_env import SubprocVecEnv, VecNormalize
+from stable_baselines3.common.vec_env import VecNormalize
 
 from sb3_aac import HybridPPO
 from sb3_aac.common.array_env import array_path
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from tests.helpers import LAYOUTS
 from tests.test_pdqn_array_path import ArrayTargetVecEnv, make
 
 SMALL = dict(n_steps=32, batch_size=32, n_epochs=2, policy_kwargs=dict(net_arch=[16]))
-
-
-@pytest.mark.parametrize("layout", LAYOUTS)
-def test_run_every_layout(layout):
-    env = ParameterizedTargetEnv(layout=layout)
-    check_env(env, skip_render_check=True)
-    model = HybridPPO("MlpPolicy", env, seed=0, **SMALL)
-    model.learn(64)
-    assert model.num_timesteps == 64 and model._n_updates == 4
-    obs, _ = env.reset(seed=0)
-    for deterministic in (True, False):
-        action, _ = model.predict(obs, deterministic=deterministic)
-        assert isinstance(action, tuple) and env.action_space.contains(action)
-    evaluate_policy(model, model.get_env(), n_eval_episodes=2)
 
 
 @pytest.mark.parametrize(
@@ -54,22 +38,13 @@ def test_shared_first_layers_serve_both_actors():
     assert policy.value_net[0].in_features == 2  # the critic has its own layers
 
 
-def test_multi_env_window_and_vec_wrappers():
+def test_vec_normalize():
     env = VecNormalize(make_vec_env(ParameterizedTargetEnv, n_envs=3, env_kwargs=dict(layout="flat")), norm_reward=False)
-    model = HybridPPO("MlpPolicy", env, seed=0, stats_window_size=7, **SMALL)
+    model = HybridPPO("MlpPolicy", env, seed=0, **SMALL)
     model.learn(96)
-    assert model.num_timesteps == 96 and model.ep_info_buffer.maxlen == 7 and model._episode_num > 0
+    assert model.num_timesteps == 96 and model._episode_num > 0
     actions, _ = model.predict(env.reset(), deterministic=False)
     assert actions.shape == (3,) and all(env.action_space.contains(a) for a in actions)
-
-
-def test_subproc_vec_env():
-    env = make_vec_env(ParameterizedTargetEnv, n_envs=2, vec_env_cls=SubprocVecEnv, env_kwargs=dict(layout="oneof"))
-    try:
-        model = HybridPPO("MlpPolicy", env, seed=0, **SMALL).learn(64)
-        assert model.num_timesteps == 64
-    finally:
-        env.close()
 
 
 def test_truncations_bootstrap_from_the_value_of_the_terminal_observation():
@@ -101,14 +76,3 @@ def test_array_path_matches_sb3_path():
         assert th.equal(value, arrays.get_parameters()["policy"][key]), key
     assert [e["r"] for e in sb3.ep_info_buffer] == pytest.approx([e["r"] for e in arrays.ep_info_buffer])
     assert sb3._episode_num == arrays._episode_num > 0
-
-
-def test_dribble_vec_env():
-    from robocup_dribble import DribbleVecEnv
-
-    env = DribbleVecEnv(4, profile="v11")
-    model = HybridPPO("MlpPolicy", env, seed=0, **SMALL)
-    model.learn(128)
-    assert model.num_timesteps == 128 and model._episode_num >= 0
-    actions, _ = model.predict(env.reset(), deterministic=True)
-    assert all(env.action_space.contains(a) for a in actions)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.helpers import ALGO_CLASSES, OWN_TESTS_ONLY, algos
+from tests.helpers import ALGO_CLASSES, algos
 
 ROOT = Path(__file__).resolve().parents[1]
 ZOO_KEYS = {"n_timesteps", "policy", "n_envs", "normalize", "policy_kwargs", "env_wrapper", "callback", "frame_stack"}
@@ -21,6 +21,7 @@ MORE_ZOO_ENVS = {
     "sarsa_aac": {"RoboCupDribble-v0"},
     "pdqn": {"Platform-v0", "sb3_aac/ParameterizedTarget-v0"},
     "mpdqn": {"Platform-v0", "sb3_aac/ParameterizedTarget-v0"},
+    "hppo": {"Platform-v0", "RoboCupDribble-v0", "sb3_aac/ParameterizedTarget-v0"},
 }
 
 
@@ -179,7 +180,7 @@ def test_every_algorithm_is_tunable_and_in_the_zoo() -> None:
     from sb3_aac.tune.search_spaces import ALGORITHMS, policies
     from sb3_aac.zoo import register
 
-    assert ALGORITHMS == {case.cli: case.algo for case in ALGO_CLASSES} | OWN_TESTS_ONLY  # one table, every algorithm
+    assert ALGORITHMS == {case.cli: case.algo for case in ALGO_CLASSES}  # one table, every algorithm
     register()
     for name, algorithm in ALGORITHMS.items():
         assert policies(name), f"{name} has no search space"
@@ -203,7 +204,7 @@ def test_the_sampler_gives_arguments_that_train_and_its_converter_restores_them(
         assert convert_params(case.cli, trial.params) == kwargs  # what rl-zoo3 trains a stored trial with
         policies.add(kwargs["policy"])
         env = make_vec_env(ParameterizedTargetEnv, n_envs=2, seed=0)
-        case.algo(env=env, seed=0, info_keywords=(), **{**case.kwargs, **kwargs}).learn(60)
+        case.algo(env=env, seed=0, info_keywords=(), **{**case.kwargs, **kwargs, **case.rollout}).learn(60)
         json.dumps(trial.params)  # storable in any Optuna storage
     assert policies <= set(case.algo.policy_aliases)
     if len(case.algo.policy_aliases) > 1:

@@ -13,6 +13,8 @@ import numpy as np
 
 from sb3_aac.common.spaces import ParameterizedActionSpec
 
+VALUE_NAMES = ("value", "q")  # V(s) and Q(s, k, x_k): see ActionStats
+
 
 class ActionStats:
     """
@@ -25,11 +27,17 @@ class ActionStats:
     - ``train/{value_name}_mean``, ``_std``, ``_min``, ``_max``: of the critic values given to :meth:`add` or
       :meth:`add_values`.
 
+    The value name says which critic output the statistics are of, so that one key means one quantity in every
+    algorithm: ``"value"`` for the state value ``V(s)`` at the steps acted from (SarsaAAC's and HybridPPO's critics),
+    ``"q"`` for the action value ``Q(s, k, x_k)`` of a training batch's actions (P-DQN, which has no ``V``).
+
     :param spec: the parsed parameterized action space
-    :param value_name: how the critic's values are named in the keys (``"value"`` for V, ``"q"`` for Q)
+    :param value_name: ``"value"`` or ``"q"``, as above
     """
 
-    def __init__(self, spec: ParameterizedActionSpec, value_name: str = "value") -> None:
+    def __init__(self, spec: ParameterizedActionSpec, value_name: str) -> None:
+        if value_name not in VALUE_NAMES:
+            raise ValueError(f"value_name must be one of {VALUE_NAMES}, got {value_name!r}")
         self.spec, self.value_name = spec, value_name
         self._owned = spec.param_type[None, :] == np.arange(spec.n_types)[:, None]  # (K, P) type k owns param j
         self._half = (spec.high - spec.low) / 2

@@ -1,4 +1,4 @@
-"""The observation check shared by every policy and algorithm of this package."""
+"""The observation checks shared by every policy and algorithm of this package."""
 
 from __future__ import annotations
 
@@ -6,6 +6,21 @@ from typing import Any
 
 import numpy as np
 from gymnasium import spaces
+
+
+def check_box_observation_space(observation_space: spaces.Space[Any], policies: str) -> None:
+    """
+    Refuse an observation space that is not a ``Box``: the policies of this package take flat observation vectors.
+
+    :param observation_space: the env's observation space
+    :param policies: who refuses it, for the message (``"P-DQN policies"``)
+    :raises ValueError: naming the space and what to do, unless it is a ``Box``
+    """
+    if not isinstance(observation_space, spaces.Box):
+        raise ValueError(
+            f"Unsupported observation space {observation_space}: {policies} take a Box observation "
+            "(flatten Dict/Tuple observations first, e.g. with gymnasium.wrappers.FlattenObservation)"
+        )
 
 
 def observation_batch(observation: Any, observation_space: spaces.Space[Any]) -> tuple[np.ndarray, bool]:

@@ -206,7 +206,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
             self.clip_range if self.clip_range_params is None else self.clip_range_params
         )
         self.clip_range_vf_schedule = None if self.clip_range_vf is None else FloatSchedule(self.clip_range_vf)
-        self._action_stats = ActionStats(self.policy.spec)
+        self._action_stats = ActionStats(self.policy.spec, value_name="value")
         self._reset_keyword_buffers()
 
     def _excluded_save_params(self) -> list[str]:
@@ -441,16 +441,35 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
         self: SelfHybridPPO,
         total_timesteps: int,
         callback: MaybeCallback = None,
-        log_interval: int = 1,
+        log_interval: int | None = 1,
         tb_log_name: str = "HybridPPO",
         reset_num_timesteps: bool = True,
         progress_bar: bool = False,
     ) -> SelfHybridPPO:
-        return super().learn(
-            total_timesteps=total_timesteps,
-            callback=callback,
-            log_interval=log_interval,
-            tb_log_name=tb_log_name,
-            reset_num_timesteps=reset_num_timesteps,
-            progress_bar=progress_bar,
+        """
+        SB3's on-policy ``learn``: collect a rollout of ``n_steps`` per env, update on it, until ``total_timesteps``
+        (so ``num_timesteps`` ends at the first multiple of ``n_steps * n_envs`` at or beyond it, unless a callback
+        stops the run). Each log dump (every ``log_interval`` rollouts; None: never) follows the update, so its
+        ``train/`` keys are of the update on the rollout its ``rollout/`` keys describe; the run ends with a dump of
+        what was logged since the previous one.
+        """
+        total_timesteps, callback = self._setup_learn(
+            total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
         )
+        callback.on_training_start(locals(), globals())
+        assert self.env is not None
+        iteration, dumped = 0, True
+        while self.num_timesteps < total_timesteps:
+            dumped = False
+            if not self.collect_rollouts(self.env, callback, self.rollout_buffer, n_rollout_steps=self.n_steps):
+                break
+            iteration += 1
+            self._update_current_progress_remaining(self.num_timesteps, total_timesteps)
+            self.train()
+            if log_interval is not None and iteration % log_interval == 0:
+                self.dump_logs(iteration)
+                dumped = True
+        if log_interval is not None and not dumped:
+            self.dump_logs(iteration)
+        callback.on_training_end()
+        return self

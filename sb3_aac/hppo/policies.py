@@ -10,6 +10,7 @@ from stable_baselines3.common.torch_layers import BaseFeaturesExtractor, create_
 from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
 from torch import nn
 
+from sb3_aac.common.observations import check_box_observation_space, observation_batch
 from sb3_aac.common.spaces import ParameterizedActionSpec
 from sb3_aac.common.torch_layers import BoundsScaledFlatten
 from sb3_aac.hppo.distributions import HybridDistribution
@@ -65,7 +66,7 @@ class HybridActorCriticPolicy(BasePolicy):
     ``predict`` returns env actions: the sampled (or, with ``deterministic=True``, the most probable) type and its
     parameters, clipped to the bounds; the nested and flat layouts also carry the other types' parameters.
 
-    :param observation_space: The observation space (any space the features extractor takes)
+    :param observation_space: The observation space (a ``Box``, as for every policy of this package)
     :param action_space: A parameterized action space (see :mod:`sb3_aac.common.spaces`)
     :param lr_schedule: Learning rate schedule (of the one optimizer over all networks)
     :param net_arch: Hidden layer sizes: a list (each of the discrete actor, the parameter actor and the critic gets
@@ -101,6 +102,7 @@ class HybridActorCriticPolicy(BasePolicy):
     ):
         if optimizer_kwargs is None:
             optimizer_kwargs = {"eps": 1e-5} if optimizer_class == th.optim.Adam else {}
+        check_box_observation_space(observation_space, "HybridPPO policies")
         self.spec = parse_action_space(action_space)
         super().__init__(
             observation_space,
@@ -213,11 +215,15 @@ class HybridActorCriticPolicy(BasePolicy):
         """
         Action(s) for one observation or a batch: sampled, or the most probable type with its mean parameters.
 
+        :param observation: one observation, or a batch ``(n, *obs_shape)`` with ``n >= 1``
         :return: one env action (a tuple ``env.step`` accepts) for a single observation, or an object ndarray of
             shape ``(n,)`` holding one per observation for a batch; and ``state`` unchanged
+        :raises ValueError: for a wrong observation shape, an empty batch, or NaN or inf values
+            (:func:`~sb3_aac.common.observations.observation_batch`)
         """
         self.set_training_mode(False)
-        obs, vectorized = self.obs_to_tensor(observation)
+        batch, vectorized = observation_batch(observation, self.observation_space)
+        obs = th.as_tensor(batch, dtype=th.float32, device=self.device)
         with th.no_grad():
             actions = self.get_distribution(obs).get_actions(deterministic=deterministic).cpu().numpy()
         return self.spec.to_env_predicted(actions[:, 0].astype(np.int64), actions[:, 1:], vectorized), state

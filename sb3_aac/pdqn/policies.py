@@ -10,7 +10,7 @@ from stable_baselines3.common.torch_layers import create_mlp
 from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
 from torch import nn
 
-from sb3_aac.common.observations import observation_batch
+from sb3_aac.common.observations import check_box_observation_space, observation_batch
 from sb3_aac.common.sizes import check_layer_sizes
 from sb3_aac.common.spaces import ParameterizedActionSpec
 
@@ -146,11 +146,7 @@ class PDQNPolicy(BasePolicy):
         optimizer_class: type[th.optim.Optimizer] = th.optim.Adam,
         optimizer_kwargs: dict[str, Any] | None = None,
     ):
-        if not isinstance(observation_space, spaces.Box):
-            raise ValueError(
-                f"Unsupported observation space {observation_space}: P-DQN policies take a Box observation "
-                "(flatten Dict/Tuple observations first, e.g. with gymnasium.wrappers.FlattenObservation)"
-            )
+        check_box_observation_space(observation_space, "P-DQN policies")
         if param_bounding not in PARAM_BOUNDINGS:
             raise ValueError(f"Unknown param_bounding {param_bounding!r}, valid values: {list(PARAM_BOUNDINGS)}")
         super().__init__(observation_space, action_space, optimizer_class=optimizer_class, optimizer_kwargs=optimizer_kwargs)

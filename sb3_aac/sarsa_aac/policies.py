@@ -16,7 +16,7 @@ from gymnasium import spaces
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import PyTorchObs
 
-from sb3_aac.common.observations import observation_batch
+from sb3_aac.common.observations import check_box_observation_space, observation_batch
 from sb3_aac.common.spaces import ParameterizedActionSpec
 from sb3_aac.sarsa_aac.approximators import DEFAULT_RBF_WINDOW, ApproximatorBank, NumpyBank
 from sb3_aac.sarsa_aac.deep import DEFAULT_SPARSITY, DeepBank, check_net_arch
@@ -55,11 +55,7 @@ class SarsaAACPolicy(BasePolicy):
         action_space: spaces.Space[Any],
         obs_bounds: tuple[np.ndarray, np.ndarray] | None = None,
     ):
-        if not isinstance(observation_space, spaces.Box):
-            raise ValueError(
-                f"Unsupported observation space {observation_space}: SarsaAAC policies take a Box observation "
-                "(flatten Dict/Tuple observations first, e.g. with gymnasium.wrappers.FlattenObservation)"
-            )
+        check_box_observation_space(observation_space, "SarsaAAC policies")
         super().__init__(observation_space, action_space)
         self.spec = ParameterizedActionSpec.from_space(action_space)
         self.n_types, self.n_params = self.spec.n_types, self.spec.n_params

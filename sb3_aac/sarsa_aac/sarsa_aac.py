@@ -641,7 +641,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         self._finite_weights_timestep = 0
         # Sums since the last dump (TRAIN_STAT_FIELDS); the executed actions and the critic's values.
         self._train_stats = np.zeros(len(TRAIN_STAT_FIELDS))
-        self._action_stats = ActionStats(self.policy.spec)
+        self._action_stats = ActionStats(self.policy.spec, value_name="value")
 
     def _flush_td_chunks(self) -> None:
         """Fold the per-step TD errors into the running sums, and stop on divergence."""
