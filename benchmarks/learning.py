@@ -29,6 +29,8 @@ The learner's targets (lane count, past the hand-coded dribbler), each with ``--
     python -m benchmarks.learning --only nav-deep --steps 60000 --set trace_lambda=0.8 --seeds 5
     python -m benchmarks.learning --only platform-deep --steps 20000 --set trace_lambda=0.8 --seeds 5
     python -m benchmarks.learning --only paper-deep --steps 150000 --set trace_lambda=0.8 --seeds 5
+    python -m benchmarks.learning --only paper-deep --steps 1000000 --seeds 5 --vs-dribbler   # one-step (lambda 0)
+    python -m benchmarks.learning --only v19-deep --steps 1000000 --seeds 2 --vs-dribbler
 
 Scores: the mean dribbled distance in metres over the benchmark's final evaluation, 1,000 greedy episodes on fresh
 players (``benchmarks.presets.FINAL_SEED``, the episodes on which the hand-coded dribbler makes 30.7 m and 25.4 m),

@@ -4,8 +4,7 @@ What ``sb3-aac tune`` and rl-zoo3's ``--optimize`` can tune: the algorithm class
 
 Adding an algorithm takes an entry in :data:`ALGORITHMS` and one :class:`SearchSpace` per policy in
 :data:`SEARCH_SPACES`; the tuner, the report, rl-zoo3's registration and sampler (:mod:`sb3_aac.zoo`) and the
-benchmark's tuning stage (``benchmarks/tuning.py``) read only these two tables. HybridPPO's space goes here too
-(``"hybrid_ppo"``).
+benchmark's tuning stage (``benchmarks/tuning.py``) read only these two tables.
 """
 
 from __future__ import annotations
