@@ -8,6 +8,7 @@ every trial trains on each task, and the check of its best settings against the 
     python -m benchmarks.suite evaluate --suite defaults --policy TilePolicy --seeds 5 --out runs/tuned \\
         --from-study hyperparams/tuned/suite-defaults/TilePolicy.journal [--tasks paper,v19]
     python -m benchmarks.suite compare runs/defaults runs/tuned
+    python -m benchmarks.suite trials --suite defaults --policy TilePolicy   # every trial's per-task scores
 
 Suites (:data:`SUITES`): ``defaults``, the budgets users spend on each task, 16 lanes each: the paper's env and v19
 for 150k env steps (``DribbleVecEnv(16)``), ``NavigationEnv`` and CatchPoint-v0 for 300k, Platform-v0
@@ -39,6 +40,7 @@ import benchmarks.execution  # noqa: F401  (first: pins BLAS to one thread befor
 
 import argparse
 import ast
+import inspect
 import json
 import time
 from collections.abc import Callable, Sequence
@@ -66,7 +68,7 @@ from sb3_aac.cli.tune import print_trial
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
 from sb3_aac.common.statistics import welch_test
 from sb3_aac.tune.report import flat_settings, literal
-from sb3_aac.tune.search_spaces import policies
+from sb3_aac.tune.search_spaces import policies, search_space
 from sb3_aac.tune.storage import open_storage
 from sb3_aac.tune.study import finished_trials, load_study, run_trials, trial_kwargs
 from sb3_aac.tune.suite import SuiteSettings, SuiteTask, normalised_score, suite_objective
@@ -237,6 +239,24 @@ def suite_settings(
     )
 
 
+def default_params(policy: str) -> dict[str, Any]:
+    """SarsaAAC's defaults with ``policy`` as a trial's parameters of its search space (rates: the policy's
+    ``default_learning_rate``)."""
+    policy_class = SarsaAAC.policy_aliases[policy]
+    rate = policy_class.default_learning_rate  # type: ignore[attr-defined]
+    defaults = {
+        name: parameter.default
+        for cls in (SarsaAAC, policy_class)
+        for name, parameter in inspect.signature(cls.__init__).parameters.items()
+    }
+    defaults.update(learning_rate=rate, q_learning_rate=rate, param_learning_rate=rate)
+    space = search_space("sarsa_aac", policy)
+    return {name: defaults[name] for name in {**space.hyperparameters, **space.policy_kwargs}}
+
+
+STORAGE_HELP = "journal file or database URL (default: hyperparams/tuned/suite-SUITE/POLICY.journal)"
+
+
 def default_storage(name: str, policy: str) -> str:
     return f"hyperparams/tuned/suite-{name}/{policy}.journal"
 
@@ -281,12 +301,23 @@ def cmd_tune(args: argparse.Namespace) -> None:
         f"{finished_trials(study)} finished so far, in {storage}",
         flush=True,
     )
+    if args.enqueue_defaults:  # the defaults as the next trial, so that the study scores them on its tasks too
+        study.enqueue_trial(default_params(args.policy), skip_if_exists=True)
     outcome = run_trials(study, suite_objective(settings), args.trials, print_suite_trial)
     best, kwargs = best_kwargs(storage, args.suite, args.policy)
     print(f"best: trial {best.number}, mean normalised score {best.value:.4f}; per task {best.user_attrs['normalised']}")
     print("evaluate it: --set " + " ".join(f"{key}={literal(value)}" for key, value in flat_settings(kwargs).items()))
     if outcome.interrupted:
         raise KeyboardInterrupt
+
+
+def cmd_trials(args: argparse.Namespace) -> None:
+    storage = args.storage or default_storage(args.suite, args.policy)
+    study = optuna.load_study(study_name=study_name(args.suite, args.policy), storage=open_storage(storage))
+    ended = study.get_trials(deepcopy=False, states=(TrialState.COMPLETE, TrialState.PRUNED, TrialState.FAIL))
+    print(f"study {study.study_name!r} in {storage}: {len(ended)} ended trials ({finished_trials(study)} finished)")
+    for trial in ended:
+        print_suite_trial(trial)
 
 
 def cmd_evaluate(args: argparse.Namespace) -> None:
@@ -407,10 +438,16 @@ def build_parser() -> argparse.ArgumentParser:
     tune = commands.add_parser("tune", help="run (or resume) the suite's study")
     with_suite(tune)
     tune.add_argument("--trials", type=int, default=30, help="finished trials the study should hold")
-    tune.add_argument("--storage", help="journal file or database URL (default: hyperparams/tuned/suite-SUITE/POLICY.journal)")
+    tune.add_argument("--storage", help=STORAGE_HELP)
     tune.add_argument("--seed", type=int, default=TUNE_SEED, help="training seed of every trial (default: %(default)s)")
     tune.add_argument("--startup-trials", type=int, default=5)
+    tune.add_argument("--enqueue-defaults", action="store_true", help="make SarsaAAC's defaults the next trial")
     tune.set_defaults(func=cmd_tune)
+
+    trials = commands.add_parser("trials", help="print every ended trial of the suite's study")
+    with_suite(trials)
+    trials.add_argument("--storage", help=STORAGE_HELP)
+    trials.set_defaults(func=cmd_trials)
 
     evaluate = commands.add_parser("evaluate", help="train the suite on seeds 0..N-1, score on the final episodes")
     with_suite(evaluate)

@@ -211,3 +211,11 @@ def test_an_evaluation_is_its_task_files_and_they_must_agree(tmp_path: Path) -> 
     (tmp_path / "z.json").write_text(json.dumps({**header, "seeds": [0, 1, 2], "tasks": {"z": {}}}))
     with pytest.raises(SystemExit, match="is another evaluation"):
         load_evaluation(str(tmp_path))
+
+
+def test_the_defaults_are_a_point_of_the_search_space() -> None:
+    from benchmarks.suite import default_params
+
+    assert default_params("TilePolicy") == {**PARAMS, "tiles_per_input": 8, "n_tilings": 8}
+    space = search_space("sarsa_aac", "RbfPolicy")
+    assert default_params("RbfPolicy") == space.sample(FixedTrial(default_params("RbfPolicy")))  # inside the ranges
