@@ -204,8 +204,11 @@ def reference_score(env_id: str, n_episodes: int, seed: int) -> float:
     raise ValueError(f"no reference score for {env_id!r}")
 
 
-def suite_tasks(name: str, n_episodes: int = TUNE_EPISODES, seed: int = TUNE_EVAL_SEED) -> tuple[SuiteTask, ...]:
-    """Suite ``name`` as the study's tasks, scored on ``n_episodes`` episodes of set ``seed``."""
+def suite_tasks(
+    name: str, n_episodes: int = TUNE_EPISODES, seed: int = TUNE_EVAL_SEED, only: set[str] | None = None
+) -> tuple[SuiteTask, ...]:
+    """Suite ``name`` as the study's tasks (those named in ``only``, if given), scored on ``n_episodes`` episodes of
+    set ``seed``."""
 
     def score(env_id: str) -> Callable[[Any], float]:
         return lambda model: greedy_score(env_id, model, n_episodes, seed)
@@ -222,6 +225,7 @@ def suite_tasks(name: str, n_episodes: int = TUNE_EPISODES, seed: int = TUNE_EVA
             fixed=task.fixed,
         )
         for task in suite(name)
+        if only is None or task.name in only
     )
 
 
@@ -272,15 +276,18 @@ def print_suite_trial(trial: FrozenTrial) -> None:
     print("   " + ", ".join(f"{task} {scores[task]:.4g} ({value:.3f})" for task, value in normalised.items()), flush=True)
 
 
-def best_kwargs(storage: str, name: str, policy: str) -> tuple[FrozenTrial, dict[str, Any]]:
-    """The best complete trial of the study of suite ``name`` in ``storage`` and its constructor keyword arguments."""
+def trial_settings(storage: str, name: str, policy: str, number: int | None = None) -> tuple[FrozenTrial, dict[str, Any]]:
+    """Trial ``number`` (None: the best complete one) of the study of suite ``name`` in ``storage`` and its
+    constructor keyword arguments."""
     study = optuna.load_study(study_name=study_name(name, policy), storage=open_storage(storage))
     complete = study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
     if not complete:
         raise SystemExit(f"study {study_name(name, policy)!r} in {storage} has no complete trial yet")
-    best = study.best_trial
+    if number is not None and number not in {trial.number for trial in complete}:
+        raise SystemExit(f"trial {number} is not a complete trial of the study; complete: {[t.number for t in complete]}")
+    trial = study.best_trial if number is None else study.trials[number]
     fixed = ast.literal_eval(study.user_attrs["settings"]["fixed"])  # the --set values the study was run with
-    return best, trial_kwargs("sarsa_aac", policy, fixed, best.params)
+    return trial, trial_kwargs("sarsa_aac", policy, fixed, trial.params)
 
 
 def cmd_tune(args: argparse.Namespace) -> None:
@@ -304,7 +311,7 @@ def cmd_tune(args: argparse.Namespace) -> None:
     if args.enqueue_defaults:  # the defaults as the next trial, so that the study scores them on its tasks too
         study.enqueue_trial(default_params(args.policy), skip_if_exists=True)
     outcome = run_trials(study, suite_objective(settings), args.trials, print_suite_trial)
-    best, kwargs = best_kwargs(storage, args.suite, args.policy)
+    best, kwargs = trial_settings(storage, args.suite, args.policy)
     print(f"best: trial {best.number}, mean normalised score {best.value:.4f}; per task {best.user_attrs['normalised']}")
     print("evaluate it: --set " + " ".join(f"{key}={literal(value)}" for key, value in flat_settings(kwargs).items()))
     if outcome.interrupted:
@@ -322,8 +329,8 @@ def cmd_trials(args: argparse.Namespace) -> None:
 
 def cmd_evaluate(args: argparse.Namespace) -> None:
     if args.from_study:
-        best, kwargs = best_kwargs(args.from_study, args.suite, args.policy)
-        label = f"trial {best.number} of {args.from_study}"
+        trial, kwargs = trial_settings(args.from_study, args.suite, args.policy, args.trial)
+        label = f"trial {trial.number} of {args.from_study}"
     else:
         kwargs, label = hyperparameters(args.set), "defaults" if not args.set else "--set"
     header: dict[str, Any] = {
@@ -335,20 +342,23 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         "episodes": FINAL_EPISODES,
         "episode_set": FINAL_SEED,
     }
-    only = set(args.tasks.split(",")) if args.tasks else None
     names = [task.name for task in suite(args.suite)]
-    if only is not None and not only <= set(names):
+    only = set(args.tasks.split(",")) if args.tasks else set(names)
+    if not only <= set(names):
         raise SystemExit(f"unknown tasks {sorted(only - set(names))}; suite {args.suite!r} has {names}")
     out = Path(args.out)
-    for task, suite_task in zip(suite(args.suite), suite_tasks(args.suite, FINAL_EPISODES, FINAL_SEED), strict=True):
-        path = out / f"{task.name}.json"
-        if only is not None and task.name not in only:
-            continue
+    to_run: set[str] = set()
+    for name in only:
+        path = out / f"{name}.json"
         if path.exists():  # resume: a task finished with the same settings is kept
             stored = json.loads(path.read_text())
             if {key: stored.get(key) for key in header} != header:
                 raise SystemExit(f"{path} holds another evaluation ({stored['settings']}); give another --out")
-            continue
+        else:
+            to_run.add(name)
+    tasks = [task for task in suite(args.suite) if task.name in to_run]
+    for task, suite_task in zip(tasks, suite_tasks(args.suite, FINAL_EPISODES, FINAL_SEED, to_run), strict=True):
+        path = out / f"{task.name}.json"
         scores, seconds = [], []
         for seed in header["seeds"]:
             env = train_env(task.env_id, task.n_envs, seed)
@@ -453,6 +463,7 @@ def build_parser() -> argparse.ArgumentParser:
     with_suite(evaluate)
     evaluate.add_argument("--seeds", type=int, default=5)
     evaluate.add_argument("--from-study", metavar="STORAGE", help="evaluate the best trial of the suite's study there")
+    evaluate.add_argument("--trial", type=int, help="with --from-study: this trial instead of the best")
     evaluate.add_argument("--tasks", metavar="A,B", help="only these tasks (processes side by side take different ones)")
     evaluate.add_argument("--out", required=True, help="folder of the scores, a TASK.json each (finished tasks are kept)")
     evaluate.set_defaults(func=cmd_evaluate)
@@ -474,7 +485,10 @@ def _suite_name(text: str) -> str:
 def main(argv: Sequence[str] | None = None) -> None:
     args = build_parser().parse_args(argv)
     th.set_num_threads(1)
-    args.func(args)
+    try:
+        args.func(args)
+    except KeyboardInterrupt:  # a study stopped by Ctrl-C has said so and kept its finished trials
+        raise SystemExit(130) from None
 
 
 if __name__ == "__main__":

@@ -219,3 +219,21 @@ def test_the_defaults_are_a_point_of_the_search_space() -> None:
     assert default_params("TilePolicy") == {**PARAMS, "tiles_per_input": 8, "n_tilings": 8}
     space = search_space("sarsa_aac", "RbfPolicy")
     assert default_params("RbfPolicy") == space.sample(FixedTrial(default_params("RbfPolicy")))  # inside the ranges
+
+
+def test_evaluate_writes_a_file_per_task_keeps_it_on_rerun_and_compares(tmp_path: Path, capsys) -> None:
+    from benchmarks.suite import main
+
+    main(["evaluate", "--suite", "smoke", "--seeds", "2", "--out", str(tmp_path / "a")])
+    written = (tmp_path / "a" / "toy.json").stat().st_mtime_ns
+    main(["evaluate", "--suite", "smoke", "--seeds", "2", "--out", str(tmp_path / "a")])  # finished: kept
+    assert (tmp_path / "a" / "toy.json").stat().st_mtime_ns == written
+    main(["evaluate", "--suite", "smoke", "--seeds", "2", "--set", "gamma=0.5", "--out", str(tmp_path / "b")])
+    capsys.readouterr()
+    main(["compare", str(tmp_path / "a"), str(tmp_path / "b")])
+    out = capsys.readouterr().out
+    assert "B: --set {'gamma': '0.5'}" in out and "\ntoy " in out and "verdict: B" in out
+    with pytest.raises(SystemExit, match="holds another evaluation"):
+        main(["evaluate", "--suite", "smoke", "--seeds", "3", "--out", str(tmp_path / "a")])
+    with pytest.raises(SystemExit, match=r"unknown tasks \['paper'\]"):
+        main(["evaluate", "--suite", "smoke", "--tasks", "paper", "--out", str(tmp_path / "c")])
