@@ -273,7 +273,8 @@ def print_suite_trial(trial: FrozenTrial) -> None:
     print_trial(trial)
     normalised = trial.user_attrs.get("normalised", {})
     scores = trial.user_attrs.get("scores", {})
-    print("   " + ", ".join(f"{task} {scores[task]:.4g} ({value:.3f})" for task, value in normalised.items()), flush=True)
+    if normalised:
+        print("   " + ", ".join(f"{task} {scores[task]:.4g} ({value:.3f})" for task, value in normalised.items()), flush=True)
 
 
 def trial_settings(storage: str, name: str, policy: str, number: int | None = None) -> tuple[FrozenTrial, dict[str, Any]]:
@@ -338,7 +339,6 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
         "policy": args.policy,
         "settings": label,
         "kwargs": {key: literal(value) for key, value in flat_settings(kwargs).items()},
-        "seeds": list(range(args.seeds)),
         "episodes": FINAL_EPISODES,
         "episode_set": FINAL_SEED,
     }
@@ -347,52 +347,54 @@ def cmd_evaluate(args: argparse.Namespace) -> None:
     if not only <= set(names):
         raise SystemExit(f"unknown tasks {sorted(only - set(names))}; suite {args.suite!r} has {names}")
     out = Path(args.out)
-    to_run: set[str] = set()
-    for name in only:
-        path = out / f"{name}.json"
-        if path.exists():  # resume: a task finished with the same settings is kept
-            stored = json.loads(path.read_text())
-            if {key: stored.get(key) for key in header} != header:
-                raise SystemExit(f"{path} holds another evaluation ({stored['settings']}); give another --out")
-        else:
-            to_run.add(name)
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    to_run: dict[str, list[int]] = {}
+    for name in names:
+        for seed in seeds if name in only else ():
+            path = out / f"{name}-s{seed}.json"
+            if path.exists():  # resume: a run finished with the same settings is kept
+                stored = json.loads(path.read_text())
+                if {key: stored.get(key) for key in header} != header:
+                    raise SystemExit(f"{path} holds another evaluation ({stored['settings']}); give another --out")
+            else:
+                to_run.setdefault(name, []).append(seed)
     tasks = [task for task in suite(args.suite) if task.name in to_run]
-    for task, suite_task in zip(tasks, suite_tasks(args.suite, FINAL_EPISODES, FINAL_SEED, to_run), strict=True):
-        path = out / f"{task.name}.json"
-        scores, seconds = [], []
-        for seed in header["seeds"]:
+    for task, suite_task in zip(tasks, suite_tasks(args.suite, FINAL_EPISODES, FINAL_SEED, set(to_run)), strict=True):
+        for seed in to_run[task.name]:
             env = train_env(task.env_id, task.n_envs, seed)
             start = time.perf_counter()
             model = SarsaAAC(args.policy, env, seed=seed, **{**task.fixed, **kwargs})
             model.learn(task.timesteps)
-            seconds.append(round(time.perf_counter() - start, 1))
+            seconds = round(time.perf_counter() - start, 1)
             env.close()
-            scores.append(suite_task.score(model))
-        result = {
-            "env_id": task.env_id,
-            "timesteps": task.timesteps,
-            "n_envs": task.n_envs,
-            "scores": scores,
-            "floor": suite_task.floor,
-            "reference": suite_task.reference,
-            "train_seconds": seconds,
-        }
-        print(f"{task.name}: {[round(s, 3) for s in scores]} mean {np.mean(scores):.4f} ({np.mean(seconds):.0f} s a run)")
-        out.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps({**header, "tasks": {task.name: result}}, indent=1) + "\n")
+            score = suite_task.score(model)
+            run = {"task": task.name, "seed": seed, "score": score, "floor": suite_task.floor}
+            run.update(reference=suite_task.reference, env_id=task.env_id, timesteps=task.timesteps, n_envs=task.n_envs)
+            print(f"{task.name} seed {seed}: {score:.4f} ({seconds:.0f} s of training)", flush=True)
+            out.mkdir(parents=True, exist_ok=True)
+            (out / f"{task.name}-s{seed}.json").write_text(json.dumps({**header, **run, "train_seconds": seconds}) + "\n")
+
+
+RUN_KEYS = ("task", "seed", "score", "floor", "reference", "env_id", "timesteps", "n_envs", "train_seconds")
 
 
 def load_evaluation(folder: str) -> dict[str, Any]:
-    """The task files ``evaluate`` wrote into ``folder`` as one evaluation (their shared header and every task)."""
+    """The run files ``evaluate`` wrote into ``folder`` (one per task and seed) as one evaluation: their shared header
+    and, per task, the scores in seed order with the seeds, floor and reference."""
     files = sorted(Path(folder).glob("*.json"))
     if not files:
         raise SystemExit(f"no evaluation files (*.json) in {folder}")
-    records = [json.loads(path.read_text()) for path in files]
-    header = {key: value for key, value in records[0].items() if key != "tasks"}
-    for path, record in zip(files, records, strict=True):
-        if {key: value for key, value in record.items() if key != "tasks"} != header:
+    runs = [json.loads(path.read_text()) for path in files]
+    header = {key: value for key, value in runs[0].items() if key not in RUN_KEYS}
+    tasks: dict[str, dict[str, Any]] = {}
+    for path, run in sorted(zip(files, runs, strict=True), key=lambda pair: (pair[1]["task"], pair[1]["seed"])):
+        if {key: value for key, value in run.items() if key not in RUN_KEYS} != header:
             raise SystemExit(f"{path} is another evaluation than {files[0]}")
-    return {**header, "tasks": {name: task for record in records for name, task in record["tasks"].items()}}
+        task = tasks.setdefault(run["task"], {"scores": [], "seeds": [], "floor": run["floor"], "reference": run["reference"]})
+        task["scores"].append(run["score"])
+        task["seeds"].append(run["seed"])
+    order = [task.name for task in suite(header["suite"]) if task.name in tasks]
+    return {**header, "tasks": {name: tasks[name] for name in order}}
 
 
 def normalised_mean(task: dict[str, Any]) -> float:
@@ -408,8 +410,8 @@ def compare_text(first: dict[str, Any], second: dict[str, Any]) -> str:
     lines = [
         f"A: {first['settings']} {first['kwargs']}",
         f"B: {second['settings']} {second['kwargs']}",
-        f"seeds {first['seeds']} vs {second['seeds']}, {first['episodes']} greedy episodes of set {first['episode_set']}",
-        f"{'task':9s} {'A mean':>9s} {'B mean':>9s} {'B - A':>9s} {'t':>7s} {'p':>7s}  A norm  B norm",
+        f"training seeds per task as listed; {first['episodes']} greedy episodes of set {first['episode_set']} each",
+        f"{'task':9s} {'A mean':>9s} {'B mean':>9s} {'B - A':>9s} {'t':>7s} {'p':>7s}  A norm  B norm  A seeds | B seeds",
     ]
     worse = []
     for name in names:
@@ -420,7 +422,7 @@ def compare_text(first: dict[str, Any], second: dict[str, Any]) -> str:
             worse.append(name)
         lines.append(
             f"{name:9s} {np.mean(a['scores']):9.4f} {np.mean(b['scores']):9.4f} {diff:+9.4f} {t:7.2f} {p:7.3g}  "
-            f"{normalised_mean(a):.3f}   {normalised_mean(b):.3f}"
+            f"{normalised_mean(a):.3f}   {normalised_mean(b):.3f}   {a['seeds']} | {b['seeds']}"
         )
     mean_a = float(np.mean([normalised_mean(first["tasks"][n]) for n in names]))
     mean_b = float(np.mean([normalised_mean(second["tasks"][n]) for n in names]))
@@ -461,11 +463,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     evaluate = commands.add_parser("evaluate", help="train the suite on seeds 0..N-1, score on the final episodes")
     with_suite(evaluate)
-    evaluate.add_argument("--seeds", type=int, default=5)
+    evaluate.add_argument("--seeds", type=int, default=5, help="runs per task, seeds FIRST_SEED, FIRST_SEED + 1, ...")
+    evaluate.add_argument("--first-seed", type=int, default=0, help="(processes side by side take different seeds)")
     evaluate.add_argument("--from-study", metavar="STORAGE", help="evaluate the best trial of the suite's study there")
     evaluate.add_argument("--trial", type=int, help="with --from-study: this trial instead of the best")
     evaluate.add_argument("--tasks", metavar="A,B", help="only these tasks (processes side by side take different ones)")
-    evaluate.add_argument("--out", required=True, help="folder of the scores, a TASK.json each (finished tasks are kept)")
+    evaluate.add_argument(
+        "--out", required=True, help="folder of the scores, a TASK-sSEED.json per run (finished runs are kept)"
+    )
     evaluate.set_defaults(func=cmd_evaluate)
 
     compare = commands.add_parser("compare", help="Welch's test per task between two evaluations (A, then B)")

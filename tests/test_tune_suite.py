@@ -163,8 +163,8 @@ def test_bad_suite_name_is_a_clear_error(capsys) -> None:
 
 
 def evaluation(settings: str, scores: dict[str, list[float]]) -> dict[str, Any]:
-    tasks = {name: {"scores": s, "floor": 0.0, "reference": 10.0} for name, s in scores.items()}
-    return {"settings": settings, "kwargs": {}, "seeds": [0, 1, 2], "episodes": 1000, "episode_set": 20000, "tasks": tasks}
+    tasks = {name: {"scores": s, "seeds": [0, 1, 2], "floor": 0.0, "reference": 10.0} for name, s in scores.items()}
+    return {"settings": settings, "kwargs": {}, "episodes": 1000, "episode_set": 20000, "tasks": tasks}
 
 
 def test_compare_wins_only_without_a_significantly_worse_task() -> None:
@@ -194,21 +194,19 @@ def test_smoke_suite_runs_from_the_command_line(tmp_path: Path, capsys) -> None:
     assert set(study.trials[0].user_attrs["normalised"]) == {"toy"}
 
 
-def test_an_evaluation_is_its_task_files_and_they_must_agree(tmp_path: Path) -> None:
+def test_an_evaluation_is_its_run_files_and_they_must_agree(tmp_path: Path) -> None:
     import json
 
     from benchmarks.suite import load_evaluation
 
-    header = {"settings": "defaults", "kwargs": {}, "seeds": [0, 1], "episodes": 1000, "episode_set": 20000}
-    for name, scores in (("x", [1.0, 2.0]), ("y", [3.0, 4.0])):
-        task = {"scores": scores, "floor": 0.0, "reference": 4.0}
-        (tmp_path / f"{name}.json").write_text(json.dumps({**header, "tasks": {name: task}}))
+    header = {"suite": "smoke", "settings": "defaults", "kwargs": {}, "episodes": 1000, "episode_set": 20000}
+    for seed, score in ((1, 2.0), (0, 1.0)):
+        run = {"task": "toy", "seed": seed, "score": score, "floor": 0.0, "reference": 4.0}
+        (tmp_path / f"toy-s{seed}.json").write_text(json.dumps({**header, **run, "train_seconds": 1.0}))
     loaded = load_evaluation(str(tmp_path))
-    assert loaded["seeds"] == [0, 1] and {name: t["scores"] for name, t in loaded["tasks"].items()} == {
-        "x": [1.0, 2.0],
-        "y": [3.0, 4.0],
-    }
-    (tmp_path / "z.json").write_text(json.dumps({**header, "seeds": [0, 1, 2], "tasks": {"z": {}}}))
+    assert loaded["settings"] == "defaults"
+    assert loaded["tasks"] == {"toy": {"scores": [1.0, 2.0], "seeds": [0, 1], "floor": 0.0, "reference": 4.0}}
+    (tmp_path / "toy-s2.json").write_text(json.dumps({**header, **run, "seed": 2, "settings": "--set"}))
     with pytest.raises(SystemExit, match="is another evaluation"):
         load_evaluation(str(tmp_path))
 
@@ -225,15 +223,15 @@ def test_evaluate_writes_a_file_per_task_keeps_it_on_rerun_and_compares(tmp_path
     from benchmarks.suite import main
 
     main(["evaluate", "--suite", "smoke", "--seeds", "2", "--out", str(tmp_path / "a")])
-    written = (tmp_path / "a" / "toy.json").stat().st_mtime_ns
-    main(["evaluate", "--suite", "smoke", "--seeds", "2", "--out", str(tmp_path / "a")])  # finished: kept
-    assert (tmp_path / "a" / "toy.json").stat().st_mtime_ns == written
+    written = (tmp_path / "a" / "toy-s1.json").stat().st_mtime_ns
+    main(["evaluate", "--suite", "smoke", "--seeds", "1", "--first-seed", "1", "--out", str(tmp_path / "a")])  # kept
+    assert (tmp_path / "a" / "toy-s1.json").stat().st_mtime_ns == written
     main(["evaluate", "--suite", "smoke", "--seeds", "2", "--set", "gamma=0.5", "--out", str(tmp_path / "b")])
     capsys.readouterr()
     main(["compare", str(tmp_path / "a"), str(tmp_path / "b")])
     out = capsys.readouterr().out
     assert "B: --set {'gamma': '0.5'}" in out and "\ntoy " in out and "verdict: B" in out
     with pytest.raises(SystemExit, match="holds another evaluation"):
-        main(["evaluate", "--suite", "smoke", "--seeds", "3", "--out", str(tmp_path / "a")])
+        main(["evaluate", "--suite", "smoke", "--seeds", "1", "--set", "gamma=0.6", "--out", str(tmp_path / "a")])
     with pytest.raises(SystemExit, match=r"unknown tasks \['paper'\]"):
         main(["evaluate", "--suite", "smoke", "--tasks", "paper", "--out", str(tmp_path / "c")])
