@@ -404,9 +404,10 @@ def normalised_mean(task: dict[str, Any]) -> float:
 def compare_text(first: dict[str, Any], second: dict[str, Any]) -> str:
     """Per task the two evaluations' means, Welch's test on the difference, and whether the second wins across the
     suite (higher mean normalised score, no task significantly worse)."""
-    names = [name for name in first["tasks"] if name in second["tasks"]]
+    shared = [name for name in first["tasks"] if name in second["tasks"]]
+    names = [name for name in shared if min(len(first["tasks"][name]["scores"]), len(second["tasks"][name]["scores"])) >= 2]
     if not names:
-        raise SystemExit("the two evaluations share no task")
+        raise SystemExit("the two evaluations share no task with at least 2 runs on each side")
     lines = [
         f"A: {first['settings']} {first['kwargs']}",
         f"B: {second['settings']} {second['kwargs']}",
@@ -427,7 +428,15 @@ def compare_text(first: dict[str, Any], second: dict[str, Any]) -> str:
     mean_a = float(np.mean([normalised_mean(first["tasks"][n]) for n in names]))
     mean_b = float(np.mean([normalised_mean(second["tasks"][n]) for n in names]))
     wins = mean_b > mean_a and not worse
-    lines.append(f"mean normalised score: A {mean_a:.4f}, B {mean_b:.4f}")
+
+    def runs(evaluation: dict[str, Any], name: str) -> int:
+        return len(evaluation["tasks"].get(name, {}).get("scores", []))
+
+    every = [*first["tasks"], *(name for name in second["tasks"] if name not in first["tasks"])]
+    missing = [f"{name} ({runs(first, name)} | {runs(second, name)} runs)" for name in every if name not in names]
+    if missing:
+        lines.append(f"not compared (fewer than 2 runs on a side): {', '.join(missing)}")
+    lines.append(f"mean normalised score over the compared tasks: A {mean_a:.4f}, B {mean_b:.4f}")
     why = f"significantly worse on {', '.join(worse)}" if worse else "a lower mean normalised score"
     lines.append("verdict: B wins across the suite" if wins else f"verdict: B does not win across the suite ({why})")
     return "\n".join(lines)

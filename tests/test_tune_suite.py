@@ -176,7 +176,9 @@ def test_compare_wins_only_without_a_significantly_worse_task() -> None:
     text = compare_text(defaults, better)
     t, p = welch_test([7.0, 7.2, 6.8], [5.0, 5.2, 4.8])
     assert f"{t:7.2f} {p:7.3g}" in text.splitlines()[4]
-    assert "mean normalised score: A 0.6500, B 0.7500" in text and text.endswith("verdict: B wins across the suite")
+    assert "mean normalised score over the compared tasks: A 0.6500, B 0.7500" in text and text.endswith(
+        "verdict: B wins across the suite"
+    )
 
     trade = evaluation("tuned", {"x": [9.0, 9.2, 8.8], "y": [7.0, 7.1, 6.9]})  # higher mean, but y is worse
     text = compare_text(defaults, trade)
@@ -235,3 +237,13 @@ def test_evaluate_writes_a_file_per_task_keeps_it_on_rerun_and_compares(tmp_path
         main(["evaluate", "--suite", "smoke", "--seeds", "1", "--set", "gamma=0.6", "--out", str(tmp_path / "a")])
     with pytest.raises(SystemExit, match=r"unknown tasks \['paper'\]"):
         main(["evaluate", "--suite", "smoke", "--tasks", "paper", "--out", str(tmp_path / "c")])
+
+
+def test_compare_leaves_out_a_task_with_fewer_than_2_runs_on_a_side() -> None:
+    from benchmarks.suite import compare_text
+
+    defaults = evaluation("defaults", {"x": [5.0, 5.2, 4.8], "y": [8.0, 8.1, 7.9]})
+    partial = evaluation("tuned", {"x": [7.0, 7.2, 6.8], "y": [9.0]})
+    text = compare_text(defaults, partial)
+    assert "not compared (fewer than 2 runs on a side): y (3 | 1 runs)" in text and "\ny " not in text
+    assert "A 0.5000, B 0.7000" in text
