@@ -202,10 +202,20 @@ def evaluate(env_id: str, policy: Any, n_episodes: int, seed: int) -> dict[str, 
 def episodic_returns(env_id: str, policy: Any, n_episodes: int, seed: int) -> tuple[np.ndarray, np.ndarray | None]:
     """Undiscounted returns of greedy episodes of an episodic domain, slot ``j`` reset with seed
     ``seed * SLOT_STRIDE + j``, and the per-episode success flags if the domain reports them (else None)."""
-    if n_episodes < 1:
-        raise ValueError(f"n_episodes must be >= 1, got {n_episodes}")
     key = episodic_domain(env_id).success_key
-    env = episodic_env(env_id)
+    returns, success = play_episodes(episodic_env(env_id), policy, n_episodes, seed, key)
+    return returns, (success if key is not None else None)
+
+
+def play_episodes(
+    env: gym.Env, policy: Any, n_episodes: int, seed: int, success_key: str | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Undiscounted returns of greedy episodes of ``env`` (closed after), slot ``j`` reset with seed
+    ``seed * SLOT_STRIDE + j``, and whether ``info[success_key]`` was true at each one's last step (all False for
+    ``success_key`` None)."""
+    if n_episodes < 1:
+        env.close()
+        raise ValueError(f"n_episodes must be >= 1, got {n_episodes}")
     returns = np.zeros(n_episodes)
     success = np.zeros(n_episodes, dtype=bool)
     try:
@@ -217,7 +227,7 @@ def episodic_returns(env_id: str, policy: Any, n_episodes: int, seed: int) -> tu
                 obs, reward, terminated, truncated, info = env.step(action)
                 returns[slot] += float(reward)
                 done = terminated or truncated
-            success[slot] = bool(info.get(key, False)) if key is not None else False
+            success[slot] = bool(info.get(success_key, False)) if success_key is not None else False
     finally:
         env.close()
-    return returns, (success if key is not None else None)
+    return returns, success

@@ -11,7 +11,7 @@ import warnings
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import optuna
@@ -31,6 +31,35 @@ EVAL_SEED_OFFSET = 10_000
 
 # ``(n_envs, seed) -> VecEnv``: how trials make their training and evaluation environments.
 EnvFactory = Callable[[int, int], VecEnv]
+# ``(trial, stop) -> value``: what a trial does (``stop`` is set by Ctrl-C; raise TrialInterrupted after it).
+Objective = Callable[[optuna.Trial, threading.Event], float]
+
+
+class StudyDefinition(Protocol):
+    """What :func:`load_study` needs of a study's settings (:class:`TuneSettings`, a suite's settings)."""
+
+    @property
+    def seed(self) -> int: ...
+
+    @property
+    def startup_trials(self) -> int: ...
+
+    @property
+    def warmup_evaluations(self) -> int: ...
+
+    def identity(self) -> dict[str, str]: ...
+
+
+def fixed_names(fixed: Mapping[str, Any]) -> set[str]:
+    """The names in ``fixed`` (constructor keyword arguments, ``policy_kwargs`` nested), policy arguments included."""
+    return {name for name in fixed if name != "policy_kwargs"} | set(fixed.get("policy_kwargs") or {})
+
+
+def trial_kwargs(algo: str, policy: str, fixed: Mapping[str, Any], params: Mapping[str, Any]) -> dict[str, Any]:
+    """The algorithm's keyword arguments for a trial's ``params``: the ``fixed`` ones, then the sampled ones."""
+    sampled = search_space(algo, policy).to_kwargs(params)
+    policy_kwargs = {**(fixed.get("policy_kwargs") or {}), **sampled.pop("policy_kwargs", {})}
+    return {**fixed, **sampled, **({"policy_kwargs": policy_kwargs} if policy_kwargs else {})}
 
 
 @dataclass(frozen=True)
@@ -77,13 +106,11 @@ class TuneSettings:
 
     def fixed_names(self) -> set[str]:
         """The names in :attr:`fixed`, policy arguments included (they are not searched)."""
-        return {name for name in self.fixed if name != "policy_kwargs"} | set(self.fixed.get("policy_kwargs") or {})
+        return fixed_names(self.fixed)
 
     def kwargs(self, params: Mapping[str, Any]) -> dict[str, Any]:
-        """The algorithm's keyword arguments for a trial's ``params``: the fixed ones, then the sampled ones."""
-        sampled = search_space(self.algo, self.policy).to_kwargs(params)
-        policy_kwargs = {**(self.fixed.get("policy_kwargs") or {}), **sampled.pop("policy_kwargs", {})}
-        return {**self.fixed, **sampled, **({"policy_kwargs": policy_kwargs} if policy_kwargs else {})}
+        """The algorithm's keyword arguments for a trial's ``params`` (:func:`trial_kwargs`)."""
+        return trial_kwargs(self.algo, self.policy, self.fixed, params)
 
     def identity(self) -> dict[str, str]:
         """The settings as study user attributes (strings), compared when a study is resumed."""
@@ -102,7 +129,7 @@ class TrialInterrupted(Exception):
     """Ctrl-C arrived during a trial: its training stopped and it is recorded as failed."""
 
 
-def load_study(storage: BaseStorage, study_name: str, settings: TuneSettings) -> optuna.Study:
+def load_study(storage: BaseStorage, study_name: str, settings: StudyDefinition) -> optuna.Study:
     """
     The study ``study_name`` in ``storage``, created if missing, with TPE and the median pruner.
 
@@ -153,20 +180,36 @@ def run_study(
     n_trials: int,
     on_trial: Callable[[optuna.trial.FrozenTrial], None] = lambda trial: None,
 ) -> StudyOutcome:
-    """
-    Run trials until the study holds ``n_trials`` finished ones (so the same call resumes an interrupted study).
+    """:func:`run_trials` with trials that train on ``make_env``'s env as ``settings`` say, scored by greedy
+    evaluations."""
+    return run_trials(study, lambda trial, stop: _train_and_score(trial, settings, make_env, stop), n_trials, on_trial)
 
-    The first Ctrl-C (SIGINT) stops the running trial's training, records that trial as failed and returns; a second
-    one raises ``KeyboardInterrupt`` at once. A trial whose training diverges (``FloatingPointError``) is pruned.
-    ``on_trial`` is called with each trial this call ends.
+
+def run_trials(
+    study: optuna.Study,
+    objective: Objective,
+    n_trials: int,
+    on_trial: Callable[[optuna.trial.FrozenTrial], None] = lambda trial: None,
+) -> StudyOutcome:
+    """
+    Run trials of ``objective`` until the study holds ``n_trials`` finished ones (so the same call resumes an
+    interrupted study).
+
+    The first Ctrl-C (SIGINT) sets the objective's ``stop`` event; the objective then raises
+    :class:`TrialInterrupted`, the trial is recorded as failed and this returns; a second Ctrl-C raises
+    ``KeyboardInterrupt`` at once. A trial whose training diverges (``FloatingPointError``) is pruned, the error in its
+    user attribute ``"diverged"``. ``on_trial`` is called with each trial this call ends.
     """
     stop = threading.Event()
     with _stop_on_sigint(stop):
         while not stop.is_set() and finished_trials(study) < n_trials:
             trial = study.ask()
             try:
-                value = _train_and_score(trial, settings, make_env, stop)
+                value = objective(trial, stop)
             except optuna.TrialPruned:
+                study.tell(trial, state=TrialState.PRUNED)
+            except FloatingPointError as error:
+                trial.set_user_attr("diverged", str(error))
                 study.tell(trial, state=TrialState.PRUNED)
             except TrialInterrupted:
                 trial.set_user_attr("interrupted", True)
@@ -204,11 +247,7 @@ def _train_and_score(trial: optuna.Trial, settings: TuneSettings, make_env: EnvF
                 stop,
                 reports,
             )
-            try:
-                model.learn(settings.timesteps, callback=evaluation)
-            except FloatingPointError as error:
-                trial.set_user_attr("diverged", str(error))
-                raise optuna.TrialPruned(f"training diverged: {error}") from None
+            model.learn(settings.timesteps, callback=evaluation)
             if stop.is_set():
                 raise TrialInterrupted
             if evaluation.pruned:
