@@ -100,7 +100,7 @@ def registered_id(env_id: str) -> Callable[[int, int], Any]:
     return lambda n_envs, seed: env_id
 
 
-Score = Callable[[SarsaAAC, bool], float]  # (model, quick) -> greedy score; quick: fewer episodes
+Score = Callable[[Any, bool], float]  # (model, quick) -> greedy score; quick: fewer episodes. Any model with predict
 
 
 def dribble_score(profile: str) -> Score:
@@ -150,12 +150,19 @@ def domain_env(env_id: str) -> Callable[[int, int], VecEnv]:
 DOMAIN_EPISODES = (200, 500)  # greedy episodes of a domain's success rate: at checkpoints (quick), at the end
 
 
+def success_key(env_id: str) -> str:
+    """The ``info`` key that flags a successful episode of a benchmark domain; a ValueError if it has none."""
+    key = domains.episodic_domain(env_id).success_key
+    if key is None:
+        raise ValueError(f"{env_id} flags no success in its info; its learning tasks score the return")
+    return key
+
+
 def domain_success(env_id: str) -> Score:
     """The greedy success rate on a benchmark domain (its ``info`` flag: Moving/Sliding stopped in the target,
     CatchPoint caught), on the episode slots of :func:`benchmarks.domains.episodic_returns`: set ``EVAL_SEED`` at
     checkpoints, ``FINAL_SEED`` at the end. Any model with SB3's ``predict`` in the env's own actions will do."""
-    if domains.episodic_domain(env_id).success_key is None:
-        raise ValueError(f"{env_id} flags no success in its info; its learning tasks score the return")
+    success_key(env_id)  # a domain without a success flag fails here, before any training
 
     def score(model: Any, quick: bool) -> float:
         n_episodes = DOMAIN_EPISODES[0] if quick else DOMAIN_EPISODES[1]
@@ -168,7 +175,7 @@ def domain_episode_success(env_id: str, model: Any, n_episodes: int, seed: int, 
     """The success flags of greedy episodes on the episode slots of :func:`benchmarks.domains.episodic_returns`
     (slot ``j`` reset with ``seed * SLOT_STRIDE + j``), the same episodes, played ``width`` at a time so that the
     model decides for a batch of observations per call (for TD3 ~50x fewer forward passes)."""
-    key = domains.episodic_domain(env_id).success_key
+    key = success_key(env_id)
     envs = [domains.episodic_env(env_id) for _ in range(min(width, n_episodes))]
     slots = list(range(len(envs)))  # the slot each env plays
     observations = [env.reset(seed=seed * domains.SLOT_STRIDE + slot)[0] for env, slot in zip(envs, slots, strict=True)]
