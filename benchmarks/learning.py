@@ -32,13 +32,18 @@ The learner's targets (lane count, past the hand-coded dribbler), each with ``--
     python -m benchmarks.learning --only paper-deep --steps 1000000 --seeds 5 --vs-dribbler   # one-step (lambda 0)
     python -m benchmarks.learning --only v19-deep --steps 1000000 --seeds 2 --vs-dribbler
 
+The benchmark's domains with interacting inputs, ``moving``, ``sliding`` and ``catch`` (Moving-v0, Sliding-v0,
+CatchPoint-v0 as :mod:`benchmarks.domains` builds them; one lane), are compared with TD3 at equal env steps by
+:mod:`benchmarks.sample_efficiency`, which trains on these tasks; alone, e.g.
+``--only moving-tile,catch-deep --set trace_lambda=0.8``.
+
 Scores: the mean dribbled distance in metres over the benchmark's final evaluation, 1,000 greedy episodes on fresh
 players (``benchmarks.presets.FINAL_SEED``, the episodes on which the hand-coded dribbler makes 30.7 m and 25.4 m),
 the mean return over 200 greedy episodes (Platform-v0, the toy env), the greedy success rate over 500 episodes (the
-navigation env). Each line prints the per-seed scores, their mean and their interquartile mean (IQM), the
+navigation env and the domains). Each line prints the per-seed scores, their mean and their interquartile mean (IQM), the
 training episodes and env steps, and the training speed. Runs are single-threaded and seeded. The IQM's 95 % CI is a
 percentile bootstrap over seeds (10,000 resamples). With ``--eval-every N`` the greedy score is also measured every
-``N`` env steps (on fewer episodes: 200 dribbling, 50 return, 200 navigation) and each line adds the training
+``N`` env steps (on fewer episodes: 200 dribbling, 50 return, 200 navigation and domains) and each line adds the training
 episodes at which every seed first reached the task's target, ``-`` for a seed that did not.
 ``--n-envs`` sets the number of lanes (environments) of any task but ``paperid``.
 """
@@ -64,8 +69,9 @@ from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
 from stable_baselines3.common.evaluation import evaluate_policy  # noqa: E402
 from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
 
-from sb3_aac import SarsaAAC, SelectObservation  # noqa: E402
+from benchmarks import domains  # noqa: E402
 from benchmarks.presets import EVAL_SEED, FINAL_SEED  # noqa: E402
+from sb3_aac import SarsaAAC, SelectObservation  # noqa: E402
 from sb3_aac.common.checkpoints import GreedyCheckpoints  # noqa: E402
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv  # noqa: E402
 
@@ -96,7 +102,7 @@ def registered_id(env_id: str) -> Callable[[int, int], Any]:
     return lambda n_envs, seed: env_id
 
 
-Score = Callable[[SarsaAAC, bool], float]  # (model, quick) -> greedy score; quick: fewer episodes
+Score = Callable[[Any, bool], float]  # (model, quick) -> greedy score; quick: fewer episodes. Any model with predict
 
 
 def dribble_score(profile: str) -> Score:
@@ -138,6 +144,63 @@ def navigation_success(model: SarsaAAC, quick: bool) -> float:
     return successes / episodes
 
 
+def domain_env(env_id: str) -> Callable[[int, int], VecEnv]:
+    """``n_envs`` lanes of a benchmark domain as the grid builds them (:func:`benchmarks.domains.train_env`)."""
+    return lambda n_envs, seed: domains.train_env(env_id, n_envs, seed)
+
+
+DOMAIN_EPISODES = (200, 500)  # greedy episodes of a domain's success rate: at checkpoints (quick), at the end
+
+
+def success_key(env_id: str) -> str:
+    """The ``info`` key that flags a successful episode of a benchmark domain; a ValueError if it has none."""
+    key = domains.episodic_domain(env_id).success_key
+    if key is None:
+        raise ValueError(f"{env_id} flags no success in its info; its learning tasks score the return")
+    return key
+
+
+def domain_success(env_id: str) -> Score:
+    """The greedy success rate on a benchmark domain (its ``info`` flag: Moving/Sliding stopped in the target,
+    CatchPoint caught), on the episode slots of :func:`benchmarks.domains.episodic_returns`: set ``EVAL_SEED`` at
+    checkpoints, ``FINAL_SEED`` at the end. Any model with SB3's ``predict`` in the env's own actions will do."""
+    success_key(env_id)  # a domain without a success flag fails here, before any training
+
+    def score(model: Any, quick: bool) -> float:
+        n_episodes = DOMAIN_EPISODES[0] if quick else DOMAIN_EPISODES[1]
+        return float(np.mean(domain_episode_success(env_id, model, n_episodes, EVAL_SEED if quick else FINAL_SEED)))
+
+    return score
+
+
+def domain_episode_success(env_id: str, model: Any, n_episodes: int, seed: int, width: int = 50) -> np.ndarray:
+    """The success flags of greedy episodes on the episode slots of :func:`benchmarks.domains.episodic_returns`
+    (slot ``j`` reset with ``seed * SLOT_STRIDE + j``), the same episodes, played ``width`` at a time so that the
+    model decides for a batch of observations per call (for TD3 ~50x fewer forward passes)."""
+    key = success_key(env_id)
+    envs = [domains.episodic_env(env_id) for _ in range(min(width, n_episodes))]
+    slots = list(range(len(envs)))  # the slot each env plays
+    observations = [env.reset(seed=seed * domains.SLOT_STRIDE + slot)[0] for env, slot in zip(envs, slots, strict=True)]
+    success = np.zeros(n_episodes, dtype=bool)
+    next_slot, playing = len(envs), list(range(len(envs)))
+    while playing:
+        actions, _ = model.predict(np.stack([observations[i] for i in playing]), deterministic=True)
+        still_playing = []
+        for i, action in zip(playing, actions, strict=True):
+            observations[i], _, terminated, truncated, info = envs[i].step(action)
+            if terminated or truncated:
+                success[slots[i]] = bool(info.get(key, False))
+                if next_slot == n_episodes:
+                    continue
+                slots[i], next_slot = next_slot, next_slot + 1
+                observations[i] = envs[i].reset(seed=seed * domains.SLOT_STRIDE + slots[i])[0]
+            still_playing.append(i)
+        playing = still_playing
+    for env in envs:
+        env.close()
+    return success
+
+
 def vec(env_class: type) -> Callable[[int, int], VecEnv]:
     return lambda n_envs, seed: make_vec_env(env_class, n_envs=n_envs, seed=seed)
 
@@ -155,11 +218,19 @@ TASKS: dict[str, tuple[Callable[[int, int], Any], int, int, dict[str, Any], Scor
     "nav": (vec(NavigationEnv), 16, 300_000, {"info_keywords": ()}, navigation_success),
     "nav1": (vec(NavigationEnv), 1, 60_000, {"info_keywords": ()}, navigation_success),
     "toy": (toy, 4, 20_000, {}, mean_return(toy, 200)),
+    "moving": (domain_env("Moving-v0"), 1, 100_000, {"info_keywords": ()}, domain_success("Moving-v0")),
+    "sliding": (domain_env("Sliding-v0"), 1, 100_000, {"info_keywords": ()}, domain_success("Sliding-v0")),
+    "catch": (domain_env("CatchPoint-v0"), 1, 100_000, {"info_keywords": ()}, domain_success("CatchPoint-v0")),
 }
+DOMAIN_TASKS = {"moving": "Moving-v0", "sliding": "Sliding-v0", "catch": "CatchPoint-v0"}  # task: its env id
 
 
 # The greedy score each task's target asks for; the paper's MLP policies are asked for 16 m.
-TARGETS = {"paper": 25.0, "paperid": 25.0, "v19": 25.4, "platform": 0.98, "nav": 0.9, "nav1": 0.9, "toy": 9.0}
+# The domains' targets are relative to TD3 (benchmarks.sample_efficiency); 0.9 is HyAR-TD3's CatchPoint success.
+TARGETS = {
+    **{"paper": 25.0, "paperid": 25.0, "v19": 25.4, "platform": 0.98, "nav": 0.9, "nav1": 0.9, "toy": 9.0},
+    **{"moving": 0.9, "sliding": 0.9, "catch": 0.9},
+}
 MLP_PAPER_TARGET = 16.0
 
 
@@ -206,6 +277,18 @@ def above(scores: list[float], reference: float) -> float:
     return float(stats.ttest_1samp(scores, reference, alternative="greater").pvalue)
 
 
+def build(
+    task: str, policy_name: str, seed: int, n_envs: int | None, rate: float | None, settings: dict[str, Any]
+) -> SarsaAAC:
+    """An untrained SarsaAAC of a (task, policy) pair on ``n_envs`` lanes (None: the task's), ``rate`` for its three
+    learning rates (None: the defaults) and ``settings`` as further keyword arguments."""
+    make_env, lanes, _, kwargs, _ = TASKS[task]
+    if rate is not None:
+        kwargs = {**kwargs, "learning_rate": rate, "q_learning_rate": rate, "param_learning_rate": rate}
+    policy, policy_kwargs = POLICIES[policy_name]
+    return SarsaAAC(policy, make_env(n_envs or lanes, seed), seed=seed, policy_kwargs=policy_kwargs, **{**kwargs, **settings})
+
+
 def run(
     task: str,
     policy_name: str,
@@ -217,16 +300,12 @@ def run(
     n_envs: int | None = None,
     vs_dribbler: bool = False,
 ) -> None:
-    make_env, lanes, budget, kwargs, score = TASKS[task]
+    _, lanes, budget, _, score = TASKS[task]
     lanes = n_envs or lanes
-    if rate is not None:
-        kwargs = {**kwargs, "learning_rate": rate, "q_learning_rate": rate, "param_learning_rate": rate}
-    kwargs = {**kwargs, **settings}
-    policy, policy_kwargs = POLICIES[policy_name]
     budget = steps or budget
     scores, episodes, speeds, reached = [], [], [], []
     for seed in seeds:
-        model = SarsaAAC(policy, make_env(lanes, seed), seed=seed, policy_kwargs=policy_kwargs, **kwargs)
+        model = build(task, policy_name, seed, lanes, rate, settings)
         watch = TargetWatch(score, eval_every, target(task, policy_name)) if eval_every else None
         start = time.perf_counter()
         model.learn(budget, callback=watch, log_interval=None)
