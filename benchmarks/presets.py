@@ -3,7 +3,7 @@
 Every number here is our choice; the reasons are next to them. A cell is plain data (:class:`Cell`), so it can be
 sent to a worker process and written into its result file as is.
 
-Seven domains (:mod:`benchmarks.domains`): the dribbling envs of both server eras, Platform-v0 (PyPI
+Seven domains (:mod:`benchmarks.domains`; the full preset runs six): the dribbling envs of both server eras, Platform-v0 (PyPI
 ``hybrid-platform``, Masson et al.'s Platform) and the ``hybrid_domains`` Goal-v0, Moving-v0, Sliding-v0 and
 CatchPoint-v0, each with its own budget. What a preset costs: ``python -m benchmarks.run --preset P --estimate``
 (:mod:`benchmarks.cost`, from :data:`STEPS_PER_SECOND` and :data:`ENV_STEP_SECONDS`).
@@ -26,7 +26,8 @@ per parameter). **Fairness rule**: every off-policy learner (SAC, TD3, DDPG, DQN
 step per transition (SB3's default for SAC/TD3/DDPG with one env; ``n_envs`` lanes and ``gradient_steps=n_envs``), and
 otherwise keeps its documented defaults (SB3's, or the reference MP-DQN code's); none is tuned for these tasks, and
 neither is SarsaAAC (its defaults were chosen on several tasks, see its docstring). The tuned twins
-(``<config>-tuned``) of the headline learners run the best settings of an equal-size study each (:mod:`benchmarks.tuning`).
+(``<config>-tuned``) of an env's ``tuned`` learners run the best settings of an equal-size study each
+(:mod:`benchmarks.tuning`); which learners are tuned where, and why: :data:`FULL`.
 """
 
 from __future__ import annotations
@@ -281,7 +282,7 @@ def config_label(algo: str, config: str) -> str:
 # ---------------------------------------------------------------------------------------------------------------------
 
 # A preset: per env id, its budget (env steps, the same for every algorithm of the env), and runs: (algo, config, seeds).
-# The evaluation sizes are shared by all envs of a preset.
+# The evaluation sizes are the preset's, unless an env's entry has its own.
 
 # quick: CI-sized. The paper env, 2 seeds, the recommended SarsaAAC policy, the paper's MLP, one baseline.
 QUICK: dict[str, Any] = {
@@ -305,41 +306,39 @@ QUICK: dict[str, Any] = {
     },
 }
 
-HEADLINE_SEEDS = tuple(range(10))  # the best of each family on each env: >= 10 seeds (benchmarks.significance)
-FEW_SEEDS = tuple(range(3))
-PAPER_SEEDS = tuple(range(5))
+HEADLINE_SEEDS = tuple(range(10))  # a headline pair's learners: >= 10 seeds (benchmarks.significance)
+PAPER_SEEDS = tuple(range(5))  # the paper's configs, the long and the wall-clock budgets, and costly default rows
+FEW_SEEDS = tuple(range(3))  # every other learner
 
-# full: its cost, per stage, is what `python -m benchmarks.run --preset full --estimate` prints (benchmarks.cost).
-# Headline pairs: the recommended SarsaAAC policy and DeepPolicy, MP-DQN (the parameterized peer users would pick;
-# P-DQN with fewer seeds) and TD3 (the best wrapped SB3 baseline of the first benchmark on both dribbling envs; on
-# Platform PPO, the best of a first 3-seed run) with 10 seeds; the paper's configs with 5; the other baselines with
-# 3. HybridPPO is a headline peer where an H-PPO figure is published (Platform, Moving) or PPO is the headline
-# baseline. Budgets: 50k env steps on dribbling (~3,500 SarsaAAC episodes), 20k on Platform; the hybrid domains'
-# beside them (_HYBRID_DOMAINS).
-_DRIBBLE_RUNS = [
-    ("SarsaAAC", "tile", HEADLINE_SEEDS),
-    ("SarsaAAC", "deep", HEADLINE_SEEDS),
-    ("MPDQN", "mpdqn", HEADLINE_SEEDS),
-    ("TD3", "td3", HEADLINE_SEEDS),
-]
-_PLATFORM_HEADLINE = [
-    ("SarsaAAC", "tile"),
-    ("SarsaAAC", "deep"),
-    ("MPDQN", "mpdqn"),
-    ("HybridPPO", "hybridppo"),
-    ("PPO", "ppo"),
-]
-# Equal wall-clock budget: the headline learners train for the same seconds of one core, evaluations excluded
-# (benchmarks.wall_clock); 120 s is about the time TD3 needs for the 50k-step budget, and 70x SarsaAAC's (TilePolicy).
-WALL_CLOCK_SECONDS = 120
+# full: the regeneration, sized to about 4 core-hours on the development machine (``python -m benchmarks.run --preset
+# full --estimate`` prints each stage's). Where the compute goes decides its shape: the torch learners that take one
+# gradient step per transition train at 250-600 env steps/s on one core (MP-DQN 4 ms a step, TD3 1.8), 30-100x slower
+# than SarsaAAC, so 10 seeds of them at a 50k budget cost what all of SarsaAAC's cells together cost. Hence, per env:
+#
+# * ``runs``: the headline learners with HEADLINE_SEEDS, the others with FEW_SEEDS (the costly defaults of a learner
+#   whose tuned twin is the headline row, with PAPER_SEEDS).
+# * ``tuned``: the learners with a tuning study (benchmarks.tuning: FULL_TUNING's size, ``tune_steps`` env steps a
+#   trial) and a tuned twin with HEADLINE_SEEDS. The study goes where a learner runs settings nobody chose for the
+#   env: every learner of the paper env (where MP-DQN's untuned 3.6 m decided the earlier verdicts), SarsaAAC's
+#   TilePolicy everywhere (its defaults were chosen on our tasks), HybridPPO and PPO on Platform and Moving. P-DQN and
+#   MP-DQN on Platform and Goal run the reference MP-DQN code's published settings (hyperparams/mpdqn.yml), which its
+#   authors chose for those domains; TD3 elsewhere runs SB3's defaults with the RL Zoo's noise, untuned.
+# * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
+#   equal seconds for the paper env's headline learners.
+#
+# Sliding-v0 (Moving's variant with inertia, no published figure) is not in this regeneration. Budgets: 50k env steps on
+# dribbling (~3,500 SarsaAAC episodes), 20k on Platform; Goal-v0 60k (the reference MP-DQN code's ~20,000 episodes,
+# after which Bester et al. report P(goal) 0.789; HyAR-TD3's figure is TD3-based); CatchPoint-v0 50k (~3,000
+# episodes of at most 25 steps); Moving-v0 100k (~1,000 episodes of at most 200 steps; H-PPO's ~1.7 is after 3M).
+WALL_CLOCK_SECONDS = 120  # about the time TD3 needs for the 50k-step budget, and 70x SarsaAAC's (TilePolicy)
 WALL_CLOCK_SEEDS = PAPER_SEEDS
 # The long budget of the dribbling envs, sized for the paper's episode counts: on the paper env (seed 0, 16 lanes)
 # SarsaAAC's TilePolicy passed 10,000 episodes at 99k env steps and 20,000 at 354k; MlpPolicy (2 hidden) 10,000 at
 # 32k and 40,000 at 471k. 500k env steps therefore test the 10,000-episode claims and the 40,000-episode one.
 LONG_BUDGET = 500_000
 LONG_SEEDS = PAPER_SEEDS
-# Tuning (benchmarks.tuning): one study per headline learner and env, all the same size: 20 trials x the env's
-# budget x 1 tuning seed, the trial pruned by the median rule on 5 greedy evaluations of 50 episodes.
+# Tuning (benchmarks.tuning): one study per tuned learner and env, all the same size: 20 trials x the env's
+# ``tune_steps`` x 1 tuning seed, the trial pruned by the median rule on 5 greedy evaluations of 50 episodes.
 FULL_TUNING: dict[str, Any] = {
     "learners": None,
     "trials": 20,
@@ -348,120 +347,104 @@ FULL_TUNING: dict[str, Any] = {
     "evaluations": 5,
     "eval_episodes": 50,
 }
+_PAPER_CONFIGS = ("rbf50", "rbfmlp2", "mlp2")
+
+
+def _runs(seeds: tuple[int, ...], *learners: str) -> list[tuple[str, str, tuple[int, ...]]]:
+    """``("SarsaAAC-tile", "TD3")`` -> runs of those learners ("<algo>-<config>" or an algo, config its lower case)."""
+    pairs = [name.split("-", 1) if "-" in name else (name, name.lower()) for name in learners]
+    return [(algo, config, seeds) for algo, config in pairs]
+
+
+def _learners(*names: str) -> list[tuple[str, str]]:
+    return [(algo, config) for algo, config, _ in _runs((), *names)]
 
 
 def _tuned(learners: list[tuple[str, str]], seeds: tuple[int, ...]) -> list[tuple[str, str, tuple[int, ...]]]:
     return [(algo, config + TUNED_SUFFIX, seeds) for algo, config in learners]
 
 
-def _headline(runs: list[tuple[str, str, tuple[int, ...]]]) -> list[tuple[str, str]]:
-    return [(algo, config) for algo, config, seeds in runs if len(seeds) >= len(HEADLINE_SEEDS)]
-
-
-# The hybrid domains (envs/hybrid_domains): per env id its budget, its headline learners (10 seeds, tuned twins,
-# tuning studies, the wall-clock view) and the long budget's runs (5 seeds; None: no long budget). Every other
-# parameterized learner and one SB3 baseline run with 3 seeds.
-# * Goal-v0: 60k env steps, the reference MP-DQN code's 20,000 episodes of ~3 actions (hyperparams/mpdqn.yml), after
-#   which Bester et al. report P(goal) 0.789; HyAR-TD3's figure is TD3-based, so TD3 is the headline baseline.
-# * CatchPoint-v0: 100k env steps, ~6,000 episodes (at most 25 steps; the scripted policy's take 14); the HyAR figure
-#   we cite (0.90) comes without a step count we could check; TD3 headline as on Goal.
-# * Moving-v0: H-PPO's ~1.7 is after 3M env steps (DI-engine's curves); 3M steps of MP-DQN are ~3 core-hours a seed,
-#   so the main budget is 100k (~1,000 episodes of at most 200 steps) and the long budget 3M for the learners that
-#   take it in minutes (SarsaAAC) or for which the figure is published (HybridPPO, and PPO, its flattened twin).
-# * Sliding-v0: no published figure; Moving's main budget and learners, no long budget.
-_HYBRID_LONG_BUDGET = 3_000_000
-_HYBRID_DOMAINS: dict[str, tuple[int, list[tuple[str, str]], list[tuple[str, str]] | None]] = {
-    "Goal-v0": (60_000, [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn"), ("TD3", "td3")], None),
-    "CatchPoint-v0": (100_000, [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn"), ("TD3", "td3")], None),
-    "Moving-v0": (
-        100_000,
-        [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn"), ("HybridPPO", "hybridppo"), ("PPO", "ppo")],
-        [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("HybridPPO", "hybridppo"), ("PPO", "ppo")],
-    ),
-    "Sliding-v0": (
-        100_000,
-        [("SarsaAAC", "tile"), ("SarsaAAC", "deep"), ("MPDQN", "mpdqn"), ("HybridPPO", "hybridppo"), ("PPO", "ppo")],
-        None,
-    ),
-}
-_HYBRID_OTHERS = tuple((algo, algo.lower()) for algo in ("PDQN", "MPDQN", "HybridPPO", "PPO", "TD3", "SAC"))
-
-
-def _hybrid_domain(
-    env_id: str, budget: int, headline: list[tuple[str, str]], long: list[tuple[str, str]] | None
+def _env(
+    budget: int,
+    runs: list[tuple[str, str, tuple[int, ...]]],
+    tuned: list[tuple[str, str]],
+    tune_steps: int,
+    **views: Any,
 ) -> dict[str, Any]:
-    """A hybrid domain's entry of :data:`FULL`: the headline learners with 10 seeds and their tuned twins, the other
-    learners of :data:`_HYBRID_OTHERS` with 3, the wall-clock view of the headline learners, the long budget's runs."""
-    others = [(algo, config, FEW_SEEDS) for algo, config in _HYBRID_OTHERS if (algo, config) not in headline]
-    spec: dict[str, Any] = {
-        "budget": budget,
-        "runs": [
-            *((algo, config, HEADLINE_SEEDS) for algo, config in headline),
-            *_tuned(headline, HEADLINE_SEEDS),
-            *others,
-        ],
-        "wall_clock": {"seconds": WALL_CLOCK_SECONDS, "runs": [(a, c, WALL_CLOCK_SEEDS) for a, c in headline]},
-    }
-    if long is not None:
-        spec["long"] = {"budget": _HYBRID_LONG_BUDGET, "runs": [(a, c, LONG_SEEDS) for a, c in long]}
-    return spec
+    """An env's entry of :data:`FULL`: its runs, then the tuned twins of ``tuned`` (HEADLINE_SEEDS), and ``views``
+    (``long``, ``wall_clock``)."""
+    entry = {"budget": budget, "runs": [*runs, *_tuned(tuned, HEADLINE_SEEDS)], "tuned": tuned, "tune_steps": tune_steps}
+    return entry | views
 
 
+# The episodic domains' evaluations cost 10-100x a dribbling episode's (Moving's run 200 steps of single-observation
+# decisions), and seeds, not episodes, dominate a verdict's variance: half the curve and final episodes there.
+_EPISODIC_SIZES = {"eval_episodes": 50, "final_episodes": 500}
+_PAPER_HEADLINE = ("SarsaAAC-tile", "MPDQN", "TD3")
 FULL: dict[str, Any] = {
     "envs": {
-        "RoboCupDribblePaper-v0": {
-            "budget": 50_000,
-            "runs": [
-                *_DRIBBLE_RUNS,
-                *_tuned(_headline(_DRIBBLE_RUNS), HEADLINE_SEEDS),
-                *(("SarsaAAC", config, PAPER_SEEDS) for config in ("rbf50", "rbfmlp2", "mlp2")),
-                ("PDQN", "pdqn", FEW_SEEDS),
-                ("HybridPPO", "hybridppo", FEW_SEEDS),  # 0.7 m at 50k steps (docs/hppo.md): no headline learner here
-                *((algo, algo.lower(), FEW_SEEDS) for algo in ("SAC", "DDPG", "DQN", "PPO", "A2C")),
+        "RoboCupDribblePaper-v0": _env(
+            50_000,
+            [
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep"),
+                *_runs(PAPER_SEEDS, *(f"SarsaAAC-{c}" for c in _PAPER_CONFIGS)),
+                *_runs(FEW_SEEDS, "MPDQN", "TD3", "HybridPPO", "PPO", "A2C", "SAC", "DQN"),
             ],
-            "long": {
+            _learners(*_PAPER_HEADLINE),
+            20_000,
+            long={
                 "budget": LONG_BUDGET,
-                "runs": [
-                    *((algo, config, LONG_SEEDS) for algo, config in _headline(_DRIBBLE_RUNS)),
-                    *(("SarsaAAC", config, LONG_SEEDS) for config in ("rbf50", "rbfmlp2", "mlp2")),
-                ],
+                "runs": _runs(LONG_SEEDS, "SarsaAAC-tile", *(f"SarsaAAC-{c}" for c in _PAPER_CONFIGS)),
             },
-            "wall_clock": {
-                "seconds": WALL_CLOCK_SECONDS,
-                "runs": [(algo, config, WALL_CLOCK_SEEDS) for algo, config in _headline(_DRIBBLE_RUNS)],
-            },
-        },
-        "RoboCupDribble-v0": {
-            "budget": 50_000,
-            "runs": [
-                *_DRIBBLE_RUNS,
-                *_tuned(_headline(_DRIBBLE_RUNS), HEADLINE_SEEDS),
-                *((algo, algo.lower(), FEW_SEEDS) for algo in ("PDQN", "HybridPPO", "PPO")),
+            wall_clock={"seconds": WALL_CLOCK_SECONDS, "runs": _runs(WALL_CLOCK_SEEDS, *_PAPER_HEADLINE)},
+        ),
+        "RoboCupDribble-v0": _env(
+            50_000,
+            [
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "PPO"),
+                *_runs(PAPER_SEEDS, "SarsaAAC-deep", "TD3"),
+                *_runs(FEW_SEEDS, "HybridPPO"),
             ],
-            "long": {"budget": LONG_BUDGET, "runs": [(a, c, LONG_SEEDS) for a, c in _headline(_DRIBBLE_RUNS)]},
-            "wall_clock": {
-                "seconds": WALL_CLOCK_SECONDS,
-                "runs": [(algo, config, WALL_CLOCK_SEEDS) for algo, config in _headline(_DRIBBLE_RUNS)],
-            },
-        },
-        PLATFORM_ID: {
-            "budget": 20_000,
-            "runs": [
-                ("SarsaAAC", "tile", HEADLINE_SEEDS),
-                ("SarsaAAC", "deep", HEADLINE_SEEDS),
-                ("MPDQN", "mpdqn", HEADLINE_SEEDS),
-                ("HybridPPO", "hybridppo", HEADLINE_SEEDS),  # H-PPO's published 0.80 (domains.PLATFORM_REFERENCES)
-                ("PDQN", "pdqn", FEW_SEEDS),
-                ("TD3", "td3", FEW_SEEDS),
-                ("PPO", "ppo", HEADLINE_SEEDS),  # the best SB3 baseline on Platform in a first 3-seed run (0.42)
-                *_tuned(_PLATFORM_HEADLINE, HEADLINE_SEEDS),
+            [],
+            20_000,
+            long={"budget": LONG_BUDGET, "runs": _runs(LONG_SEEDS, "SarsaAAC-tile")},
+        ),
+        PLATFORM_ID: _env(
+            20_000,
+            [
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO", "PPO"),
+                *_runs(FEW_SEEDS, "MPDQN", "PDQN"),  # the reference settings; published 0.987 and 0.93
+                *_runs(FEW_SEEDS, "SarsaAAC-deep"),
             ],
-            "wall_clock": {
-                "seconds": WALL_CLOCK_SECONDS,
-                "runs": [(algo, config, WALL_CLOCK_SEEDS) for algo, config in _PLATFORM_HEADLINE],
-            },
-        },
-        **{env_id: _hybrid_domain(env_id, *spec) for env_id, spec in _HYBRID_DOMAINS.items()},
+            [],
+            10_000,
+            **_EPISODIC_SIZES,
+        ),
+        "Goal-v0": _env(
+            60_000,
+            [
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO"),
+                *_runs(FEW_SEEDS, "MPDQN"),  # the reference settings; published P(goal) 0.789
+                *_runs(FEW_SEEDS, "SarsaAAC-deep"),
+            ],
+            _learners("SarsaAAC-tile"),
+            30_000,
+            **_EPISODIC_SIZES,
+        ),
+        "CatchPoint-v0": _env(
+            50_000,
+            [*_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "TD3"), *_runs(FEW_SEEDS, "SarsaAAC-deep")],
+            _learners("SarsaAAC-tile"),
+            25_000,
+            **_EPISODIC_SIZES,
+        ),
+        "Moving-v0": _env(
+            100_000,
+            [*_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO", "PPO"), *_runs(FEW_SEEDS, "SarsaAAC-deep")],
+            _learners("SarsaAAC-tile"),
+            50_000,
+            **_EPISODIC_SIZES,
+        ),
     },
     "tuning": FULL_TUNING,
     "eval_every": 500,
@@ -473,15 +456,26 @@ PRESETS = {"quick": QUICK, "full": FULL}
 
 
 def build_cells(preset: str | dict[str, Any]) -> list[Cell]:
-    """All cells of a preset (a name of :data:`PRESETS` or a dict of the same shape), references first."""
+    """All cells of a preset (a name of :data:`PRESETS` or a dict of the same shape), references first; an env's
+    ``eval_every``, ``eval_episodes`` and ``final_episodes`` are its entry's where it has them, else the preset's."""
     p = PRESETS[preset] if isinstance(preset, str) else preset
-    common = {"eval_every": p["eval_every"], "eval_episodes": p["eval_episodes"], "final_episodes": p["final_episodes"]}
+
+    def sizes(spec: dict[str, Any]) -> dict[str, int]:  # an env's evaluation sizes: its own, else the preset's
+        return {key: spec.get(key, p[key]) for key in ("eval_every", "eval_episodes", "final_episodes")}
+
     cells = [
-        Cell(env_id, "Reference", "references", final_episodes=p["final_episodes"], eval_episodes=p["eval_episodes"])
-        for env_id in p["envs"]
+        Cell(
+            env_id,
+            "Reference",
+            "references",
+            final_episodes=sizes(spec)["final_episodes"],
+            eval_episodes=sizes(spec)["eval_episodes"],
+        )
+        for env_id, spec in p["envs"].items()
         if env_id in ENV_PROFILES  # Platform's references are published figures (benchmarks.domains)
     ]
     for env_id, spec in p["envs"].items():
+        common = sizes(spec)
         for algo, config, seeds in spec["runs"]:
             cells += [Cell(env_id, algo, config, seed, spec["budget"], **common) for seed in seeds]
         if "long" in spec:  # a longer env-step budget for some learners
@@ -496,19 +490,28 @@ def build_cells(preset: str | dict[str, Any]) -> list[Cell]:
 
 
 def tuning_spec(preset: str | dict[str, Any]) -> dict[str, Any]:
-    """A preset's tuning budget (benchmarks.tuning): ``learners`` per env id (None in the preset: the headline learners,
-    the runs with :data:`HEADLINE_SEEDS`), ``trials``, ``seeds``, ``env_steps`` per env id (None: the env's budget),
-    ``evaluations`` and ``eval_episodes``."""
+    """A preset's tuning budget (benchmarks.tuning): ``learners`` per env id (None in the preset: each env's
+    ``tuned`` learners, or where it lists none, the runs with :data:`HEADLINE_SEEDS`), ``trials``, ``seeds``,
+    ``env_steps`` per env id (None in the preset: the env's ``tune_steps``, else its budget), ``evaluations`` and
+    ``eval_episodes``."""
     p = PRESETS[preset] if isinstance(preset, str) else preset
     if "tuning" not in p:
         raise ValueError("this preset has no tuning budget (a 'tuning' entry)")
     spec = dict(p["tuning"])
     learners, steps = spec["learners"], spec["env_steps"]
-    spec["learners"] = {
-        env_id: list(learners) if learners is not None else _headline([r for r in env["runs"] if not is_tuned(r[1])])
-        for env_id, env in p["envs"].items()
+
+    def env_learners(env: dict[str, Any]) -> list[tuple[str, str]]:
+        if learners is not None:
+            return list(learners)
+        if "tuned" in env:
+            return list(env["tuned"])
+        headline = [r for r in env["runs"] if not is_tuned(r[1]) and len(r[2]) >= len(HEADLINE_SEEDS)]
+        return [(algo, config) for algo, config, _ in headline]
+
+    spec["learners"] = {env_id: env_learners(env) for env_id, env in p["envs"].items()}
+    spec["env_steps"] = {
+        env_id: env.get("tune_steps", env["budget"]) if steps is None else steps for env_id, env in p["envs"].items()
     }
-    spec["env_steps"] = {env_id: env["budget"] if steps is None else steps for env_id, env in p["envs"].items()}
     return spec
 
 
