@@ -36,7 +36,7 @@ from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
 
 from benchmarks import domains, significance  # noqa: E402
 from benchmarks.adapters import FlatActionAdapter, adapter_for, build_baseline  # noqa: E402
-from benchmarks.learning import iqm_ci  # noqa: E402
+from benchmarks.learning import iqm_ci, navigation_success  # noqa: E402
 from benchmarks.presets import BASELINES, FINAL_SEED, PLATFORM_ID  # noqa: E402
 from benchmarks.zoo_hyperparams import settings  # noqa: E402
 from sb3_aac import FlattenParameterizedAction, HybridPPO  # noqa: E402
@@ -51,19 +51,6 @@ def hppo_env(env_id: str, n_envs: int, seed: int) -> VecEnv:
     if env_id == ENV_IDS["nav"]:
         return make_vec_env(NavigationEnv, n_envs=n_envs, seed=seed)
     return domains.train_env(env_id, n_envs, seed)
-
-
-def navigation_success(policy: Any, n_episodes: int, seed: int) -> float:
-    """Greedy success rate over ``n_episodes`` navigation episodes (50 lanes, seeded)."""
-    env = make_vec_env(NavigationEnv, n_envs=50, seed=seed)
-    obs, successes, episodes = env.reset(), 0, 0
-    while episodes < n_episodes:
-        obs, _, dones, infos = env.step(policy.predict(obs, deterministic=True)[0])
-        for done, info in zip(dones, infos, strict=True):
-            if done and episodes < n_episodes:
-                successes += bool(info["is_success"])
-                episodes += 1
-    return successes / episodes
 
 
 def score(env_id: str, policy: Any, n_episodes: int) -> float:

@@ -132,16 +132,22 @@ def mean_return(make: Callable[[int, int], VecEnv], episodes: int) -> Score:
     return score
 
 
-def navigation_success(model: SarsaAAC, quick: bool) -> float:
-    env = make_vec_env(NavigationEnv, n_envs=50, seed=10_000)
+def navigation_success(policy: Any, n_episodes: int, seed: int) -> float:
+    """Greedy success rate over the first ``n_episodes`` episodes to end on 50 seeded lanes of
+    :class:`~sb3_aac.common.envs.NavigationEnv` (any model with SB3's ``predict`` in the env's own actions)."""
+    env = make_vec_env(NavigationEnv, n_envs=50, seed=seed)
     obs, successes, episodes = env.reset(), 0, 0
-    while episodes < (200 if quick else 500):
-        obs, _, dones, infos = env.step(model.predict(obs, deterministic=True)[0])
+    while episodes < n_episodes:
+        obs, _, dones, infos = env.step(policy.predict(obs, deterministic=True)[0])
         for done, info in zip(dones, infos, strict=True):
-            if done:
+            if done and episodes < n_episodes:
                 successes += bool(info["is_success"])
                 episodes += 1
     return successes / episodes
+
+
+def navigation_score(model: SarsaAAC, quick: bool) -> float:
+    return navigation_success(model, 200 if quick else 500, 10_000)
 
 
 def domain_env(env_id: str) -> Callable[[int, int], VecEnv]:
@@ -215,8 +221,8 @@ TASKS: dict[str, tuple[Callable[[int, int], Any], int, int, dict[str, Any], Scor
     "paperid": (registered_id("RoboCupDribblePaper-v0"), 1, 150_000, {}, dribble_score("v11")),
     "v19": (dribble_env("v19"), 16, 150_000, {}, dribble_score("v19")),
     "platform": (platform_env, 16, 100_000, {"info_keywords": ()}, mean_return(platform_env, 200)),
-    "nav": (vec(NavigationEnv), 16, 300_000, {"info_keywords": ()}, navigation_success),
-    "nav1": (vec(NavigationEnv), 1, 60_000, {"info_keywords": ()}, navigation_success),
+    "nav": (vec(NavigationEnv), 16, 300_000, {"info_keywords": ()}, navigation_score),
+    "nav1": (vec(NavigationEnv), 1, 60_000, {"info_keywords": ()}, navigation_score),
     "toy": (toy, 4, 20_000, {}, mean_return(toy, 200)),
     "moving": (domain_env("Moving-v0"), 1, 100_000, {"info_keywords": ()}, domain_success("Moving-v0")),
     "sliding": (domain_env("Sliding-v0"), 1, 100_000, {"info_keywords": ()}, domain_success("Sliding-v0")),

@@ -520,24 +520,43 @@ def setup_section(
     return lines
 
 
+def evaluation_sizes(results: list[dict[str, Any]]) -> dict[tuple[int, int], list[str]]:
+    """(episodes per curve point, final episodes) -> the env ids evaluated with those sizes, in the results' order."""
+    sizes: dict[tuple[int, int], list[str]] = {}
+    for r in results:
+        cell = r["cell"]
+        if cell["algo"] != "Reference":
+            envs = sizes.setdefault((cell["eval_episodes"], cell["final_episodes"]), [])
+            envs += [] if cell["env_id"] in envs else [cell["env_id"]]
+    return sizes
+
+
 def method_section(results: list[dict[str, Any]]) -> list[str]:
     cell = next((r["cell"] for r in results if r["cell"]["algo"] != "Reference"), None)
     lines = ["## Method", ""]
+    sizes = evaluation_sizes(results)
     if cell:
+        curve, final = (f"{cell['eval_episodes']}", f"{cell['final_episodes']:,}") if len(sizes) == 1 else ("the", "the")
         lines.append(
             f"- **Learning curves**: every {cell['eval_every']:,} training episodes, "
-            f"{cell['eval_episodes']} greedy episodes of a fixed evaluation set (seed {results[0].get('eval_seed', 10000)}); "
+            f"{curve} greedy episodes of a fixed evaluation set (seed {results[0].get('eval_seed', 10000)}); "
             "a point before training and one where training ended. x = training episodes, env steps, or training "
             "seconds (evaluations excluded); y = the env's metric: mean metres dribbled (dribbling), mean return (Platform, "
             "Moving, Sliding) or success share (Goal: P(goal); CatchPoint)."
         )
         lines.append(
-            f"- **Final evaluation**: {cell['final_episodes']:,} greedy episodes of another fixed set "
+            f"- **Final evaluation**: {final} greedy episodes of another fixed set "
             f"(seed {results[0].get('final_seed', 20000)}). '>= 20 m' is the share of those episodes that dribbled at least "
             "20 m; 'ball lost' the share that ended by losing the ball; on the other domains 'success' the share of "
             "successful episodes (Platform: return 1; the hybrid domains: the env's own flag) and 'mean return' the mean "
             "undiscounted return."
         )
+        if len(sizes) > 1:
+            lines.append(
+                "- **Episodes per curve point / final evaluation**: "
+                + "; ".join(f"{', '.join(envs)}: {c} / {f:,}" for (c, f), envs in sizes.items())
+                + "."
+            )
     lines += [
         "- **Common random numbers**: every policy meets the identical evaluation episodes. Dribbling: episode slot j of "
         "a set has its own seeded player type, start state and noise stream, whichever lane plays it and whenever "

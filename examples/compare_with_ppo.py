@@ -21,14 +21,9 @@ from stable_baselines3.common.env_util import make_vec_env
 import robocup_dribble  # noqa: F401  (registers the env ids)
 from robocup_dribble import DribbleVecEnv
 from robocup_dribble.evaluation import evaluate_dribbling
-from sb3_aac import SarsaAAC
+from sb3_aac import FlattenParameterizedAction, SarsaAAC
 from sb3_aac.common.spaces import ParameterizedActionSpec
-
-try:
-    from sb3_aac import FlattenParameterizedAction
-    from sb3_aac.wrappers import scores_to_action
-except ImportError as error:  # the wrappers live on the `wrappers` branch until it is merged
-    raise SystemExit(f"this example needs sb3_aac.FlattenParameterizedAction ({error})") from None
+from sb3_aac.wrappers import scores_to_action
 
 ENV_ID, PROFILE = "RoboCupDribblePaper-v0", "v11"
 

@@ -453,6 +453,9 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
         *cells("Moving-v0", "HybridPPO", "hybridppo", 1.60, "peer"),
         *cells("Moving-v0", "PPO", "ppo", 1.10, "baseline"),
     ]
+    for r in results:  # an env with evaluation sizes of its own (the full preset's episodic domains)
+        if r["cell"]["env_id"] == "Goal-v0":
+            r["cell"].update(eval_episodes=50, final_episodes=500)
     (tmp_path / "cells").mkdir()
     for r in results:
         (tmp_path / "cells" / f"{r['cell_id']}.json").write_text(json.dumps(r))
@@ -468,6 +471,8 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
         "episodes to 0.7",
         "episodes to 1.5",
         "HybridPPO (Moving-v0): hyperparams/hppo.yml (Platform-v0; no entry for Moving-v0)",
+        "- **Episodes per curve point / final evaluation**: Goal-v0: 50 / 500; Moving-v0: 100 / 1,000.",
+        "- **Final evaluation**: the greedy episodes of another fixed set",
         "MPDQN (Goal-v0): hyperparams/mpdqn.yml (Goal-v0, the reference code's initial parameter policy)",
         "MPDQN (Moving-v0): MPDQN defaults (no entry for Moving-v0 in hyperparams/mpdqn.yml)",
         "SarsaAAC** runs with its defaults on 16 lanes",
