@@ -261,12 +261,15 @@ def run_cell(cell_data: dict[str, Any], out: str) -> dict[str, Any]:
 
 def run_cell_safely(cell_data: dict[str, Any], out: str) -> tuple[str, str, dict[str, Any] | str]:
     """``run_cell`` under the cell's lock, with an exception turned into ``errors/<cell_id>.txt`` and a ``"failed"``
-    status; ``"busy"`` if another live process is running the cell."""
+    status; ``"busy"`` if another live process is running the cell, ``"skipped"`` if another process finished it
+    since this run listed its cells (two invocations sharing one results folder never run a cell twice)."""
     cell = Cell.from_dict(cell_data)
     error_file = Path(out) / "errors" / f"{cell.cell_id}.txt"
     with cell_lock(Path(out), cell.cell_id) as locked:
         if not locked:
             return cell.cell_id, "busy", "running in another process"
+        if cells.is_finished(Path(out), cell):
+            return cell.cell_id, "skipped", "finished by another process"
         try:
             result = run_cell(cell_data, out)
         except Exception:
@@ -352,7 +355,8 @@ def run_grid(
 ) -> dict[str, list[str]]:
     """
     Run the cells that have no sound result file yet (a damaged one is named in a warning and computed again);
-    returns the ids ``done``, ``skipped`` (finished before), ``failed`` and ``busy`` (running in another process).
+    returns the ids ``done``, ``skipped`` (finished before, or by another process meanwhile), ``failed`` and ``busy``
+    (running in another process).
 
     ``engine`` runs them elsewhere (:class:`benchmarks.engines.RayEngine`); None: the local process pool of ``workers``,
     whose processes end with this process, however it ends: on an exception or interrupt here they are terminated,
@@ -379,7 +383,9 @@ def run_grid(
         status[state].append(cell_id)
         bar.update(1)
         if progress:
-            text = {"done": _summary_line, "busy": str}.get(state, lambda p: "FAILED: " + p.strip().splitlines()[-1])(payload)
+            text = {"done": _summary_line, "busy": str, "skipped": str}.get(
+                state, lambda p: "FAILED: " + p.strip().splitlines()[-1]
+            )(payload)
             tqdm.write(f"{cell_id}: {text}")
 
     try:

@@ -285,6 +285,19 @@ def test_a_live_runs_temporaries_and_running_cell_are_left_alone(tmp_path: Path)
     assert live.exists() and not dead.exists()
 
 
+def test_a_cell_another_run_finished_after_this_run_listed_it_is_not_run_again(tmp_path: Path) -> None:
+    from benchmarks import run as bench_run
+    from benchmarks.execution import run_cell_safely
+
+    reference = GRID[0]
+    assert bench_run.run_grid([reference], tmp_path, workers=1, progress=False)["done"] == [reference.cell_id]
+    path = tmp_path / "cells" / f"{reference.cell_id}.json"
+    before = path.read_bytes()
+    # this run listed the cell before the other one finished it: it takes the lock, finds the file and stops
+    assert run_cell_safely(reference.to_dict(), str(tmp_path))[:2] == (reference.cell_id, "skipped")
+    assert path.read_bytes() == before
+
+
 # ------------------------------------------------------------------------------------------------------ the trainer
 
 TRAIN = ["-m", "sb3_aac.cli", "train", "--policy", "RbfPolicy", "--n-envs", "2", "--eval-episodes", "0", "--set", "n_rbf=3"]
