@@ -402,8 +402,7 @@ FULL: dict[str, Any] = {
             50_000,
             [
                 *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "PPO"),
-                *_runs(PAPER_SEEDS, "SarsaAAC-deep", "TD3"),
-                *_runs(FEW_SEEDS, "HybridPPO"),
+                *_runs(FEW_SEEDS, "SarsaAAC-deep", "TD3", "HybridPPO"),
             ],
             [],
             20_000,
@@ -413,7 +412,7 @@ FULL: dict[str, Any] = {
             20_000,
             [
                 *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO", "PPO"),
-                *_runs(FEW_SEEDS, "MPDQN", "PDQN", "SarsaAAC-deep"),  # the reference settings; published 0.987, 0.93
+                *_runs(FEW_SEEDS, "MPDQN", "SarsaAAC-deep"),  # MP-DQN: the reference settings; published 0.987
             ],
             [],
             10_000,
