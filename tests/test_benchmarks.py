@@ -510,10 +510,13 @@ def test_the_peers_take_their_yml_entry_or_the_stated_fallback():
 
 
 def test_the_finished_cells_of_the_results_are_cells_of_the_full_preset():
-    """Adding learners and domains keeps every finished cell's id and definition: a rerun skips them."""
+    """Adding learners and domains keeps every finished cell's id and definition, a tuned cell's with the settings of
+    the committed tuned file: a rerun skips them."""
+    from benchmarks.tuned import resolve_tuned
+
     out = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
     files = sorted((out / "cells").glob("*.json"))
-    full = {cell.cell_id: cell for cell in build_cells("full")}
+    full = {cell.cell_id: cell for cell in resolve_tuned(build_cells("full"))}
     assert files and all(path.stem in full for path in files)
     assert all(cell_files.is_finished(out, full[path.stem]) for path in files)
 
