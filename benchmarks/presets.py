@@ -310,8 +310,8 @@ HEADLINE_SEEDS = tuple(range(10))  # a headline pair's learners: >= 10 seeds (be
 PAPER_SEEDS = tuple(range(5))  # the paper's configs, the long and the wall-clock budgets, and costly default rows
 FEW_SEEDS = tuple(range(3))  # every other learner
 
-# full: the regeneration, sized to about 5 core-hours (estimated; 4.2 measured on 2026-12-02) on the development machine (``python -m benchmarks.run --preset
-# full --estimate`` prints each stage's). Where the compute goes decides its shape: the torch learners that take one
+# full: the regeneration, sized to about 5 core-hours on the development machine (4.2 measured on 2026-12-02;
+# ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes decides its shape: the torch learners that take one
 # gradient step per transition train at 250-600 env steps/s on one core (MP-DQN 4 ms a step, TD3 1.8), 30-100x slower
 # than SarsaAAC, so 10 seeds of them at a 50k budget cost what all of SarsaAAC's cells together cost. Hence, per env:
 #
