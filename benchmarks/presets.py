@@ -320,10 +320,10 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 #   whose tuned twin is the headline row, with PAPER_SEEDS).
 # * ``tuned``: the learners with a tuning study (benchmarks.tuning: FULL_TUNING's size, ``tune_steps`` env steps a
 #   trial) and a tuned twin with HEADLINE_SEEDS. The study goes where a learner runs settings nobody chose for the
-#   env: every learner of the paper env (where MP-DQN's untuned 3.6 m decided the earlier verdicts), SarsaAAC's
-#   TilePolicy everywhere (its defaults were chosen on our tasks), HybridPPO and PPO on Platform and Moving. P-DQN and
-#   MP-DQN on Platform and Goal run the reference MP-DQN code's published settings (hyperparams/mpdqn.yml), which its
-#   authors chose for those domains; TD3 elsewhere runs SB3's defaults with the RL Zoo's noise, untuned.
+#   env: every headline learner of the paper env (where MP-DQN's untuned 3.6 m decided the earlier verdicts) and
+#   SarsaAAC's TilePolicy on the hybrid domains (its defaults were chosen on our tasks, Platform among them). MP-DQN
+#   on Platform and Goal runs the reference MP-DQN code's published settings (hyperparams/mpdqn.yml), which its
+#   authors chose for those domains; TD3, PPO and HybridPPO elsewhere run their documented defaults, untuned.
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners.
 #
