@@ -509,10 +509,12 @@ def test_the_peers_take_their_yml_entry_or_the_stated_fallback():
     assert (moving.gamma, moving.learning_starts, moving.buffer_size) == (0.99, 500, 100_000)  # MPDQN's defaults
 
 
-def test_the_finished_cells_of_the_results_are_cells_of_the_full_preset():
+def test_the_finished_cells_of_the_results_are_cells_of_the_full_preset(monkeypatch):
     """Adding learners and domains keeps every finished cell's id and definition, a tuned cell's with the settings of
     the committed tuned file: a rerun skips them."""
-    from benchmarks.tuned import resolve_tuned
+    from benchmarks.tuned import TUNED_DIR_VAR, resolve_tuned
+
+    monkeypatch.delenv(TUNED_DIR_VAR, raising=False)  # the committed hyperparams/tuned (a --tuned-dir run sets it)
 
     out = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
     files = sorted((out / "cells").glob("*.json"))
