@@ -510,7 +510,7 @@ def _step_lanes(
             p1 = min(max(params[i, first + 1], param_low[first + 1]), param_high[first + 1])
         c_kind, power, direction = skills.command(estimate, i, types, i, kind, p0, p1, k)
         previous_x = state[i, physics.P_X]
-        collided, _ = physics.cycle(state, i, types, i, c_kind, power, direction, uniforms, i, k)
+        collided, _, _ = physics.cycle(state, i, types, i, c_kind, power, direction, uniforms, i, k)
         reward, lost = task.evaluate(state, i, types, i, collided, previous_x, c, k)
         if not lost:
             distance[i] = state[i, physics.P_X] - start_x[i]

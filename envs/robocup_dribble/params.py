@@ -5,9 +5,13 @@ Names follow the server's own ``server.conf`` / ``player.conf`` keys (``server::
 message. Values and version history: ``docs/physics.md`` §0 and §7.3, read from
 rcssserver's ``src/serverparam.cpp`` and ``src/playerparam.cpp``.
 
-Two profiles ship:
+Three profiles ship:
 
 * ``"v19"``: rcssserver 19.0.0, the current server (default). Verified against recordings of a real server.
+* ``"v15"``: rcssserver 15.2.2 as Half Field Offense builds it (the HFO fork of the server): v19's parameters but
+  for the single-leg dash of v18 and earlier, dash power in [-100, 100], dash directions in steps of 45 degrees and
+  back_dash_rate 0.6 (read from that fork's ``src/serverparam.cpp`` and ``src/player.cpp``; its player.conf defaults
+  equal v19's).
 * ``"v11"``: the 2007 server the paper (Uc-Cetina 2013) used: 7 player types, no dash direction,
   box-shaped noise, player speed max 1.2, ball speed max 2.7, stamina max 4000, kick_rand 0 for the
   default type and the effort-increase threshold bug.
@@ -22,6 +26,10 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 EPS = 1e-10  # rcssserver src/utility.h
+
+PITCH_HALF_LENGTH = 52.5  # m: the goal lines stand at x = +-52.5 (hard-coded in the server, docs/physics.md §8)
+PITCH_HALF_WIDTH = 34.0  # m: the touch lines at y = +-34
+GOAL_POST_RADIUS = 0.06  # m (hard-coded in the server, docs/physics.md §6.3)
 
 
 def kickable_radius(player_size: float, ball_size: float, kickable_margin: float) -> float:
@@ -78,6 +86,16 @@ class ServerParams:
     effort_inc: float = 0.01
     player_speed_max_min: float = 0.75  # lower end of the heterogeneous acceptance window
     foul_detect_probability: float = 0.5  # type 0 (v14+); carried by player types, unused by the physics
+    goal_width: float = 14.02  # m; the goal posts stand at y = +-(goal_width / 2 + GOAL_POST_RADIUS)
+    tackle_dist: float = 2.0  # m: reach of a tackle in front of the player (v12+ values from here on)
+    tackle_back_dist: float = 0.0  # m: reach behind (0: no tackle behind)
+    tackle_width: float = 1.25  # m: reach to the side
+    tackle_exponent: float = 6.0  # of the failure probability (|x| / dist)^e + (|y| / width)^e
+    tackle_cycles: int = 10  # cycles a tackle freezes the player: its own and the next nine refuse every command
+    tackle_power_rate: float = 0.027
+    max_tackle_power: float = 100.0  # effective power of a tackle straight ahead
+    max_back_tackle_power: float = 0.0  # ... and straight back
+    tackle_rand_factor: float = 2.0  # tackle noise = the type's kick_rand times this factor
 
 
 @dataclass(frozen=True)
@@ -155,6 +173,10 @@ class ServerProfile:
                 raise ValueError(f"server.{name} must be >= 0, got {getattr(s, name)!r}")
         if s.min_power > s.max_power or s.min_dash_power > s.max_dash_power:
             raise ValueError("server power ranges must satisfy min <= max")
+        if isinstance(s.tackle_cycles, bool) or not isinstance(s.tackle_cycles, int) or s.tackle_cycles < 0:
+            raise ValueError(f"server.tackle_cycles must be an integer >= 0, got {s.tackle_cycles!r}")
+        if not s.goal_width > 0:
+            raise ValueError(f"server.goal_width must be > 0, got {s.goal_width!r}")
         if self.player.player_types < 1:
             raise ValueError(f"player.player_types must be >= 1, got {self.player.player_types}")
 
@@ -206,7 +228,13 @@ V11 = ServerProfile(
     catchable_area_stretch=False,
 )
 
-PROFILES: dict[str, ServerProfile] = {"v19": V19, "v11": V11}
+V15 = ServerProfile(
+    name="v15",
+    server=ServerParams(min_dash_power=-100.0, dash_angle_step=45.0, back_dash_rate=0.6),
+    dash_model="single",
+)
+
+PROFILES: dict[str, ServerProfile] = {"v19": V19, "v15": V15, "v11": V11}
 
 
 def make_profile(profile: str | ServerProfile = "v19", **server_overrides: float) -> ServerProfile:

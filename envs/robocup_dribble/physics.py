@@ -40,18 +40,22 @@ import numpy as np
 from numba import njit
 
 from robocup_dribble import params
-from robocup_dribble.params import EPS, ServerProfile
+from robocup_dribble.params import EPS, GOAL_POST_RADIUS, PITCH_HALF_LENGTH, ServerProfile
 from robocup_dribble.player_types import TYPE_FIELDS
 
 # Every vector the compiled code reads is laid out by one tuple of field names; the column constants below are
 # looked up by name in it, so a field can be added or moved in one place.
 
 # --- state columns -------------------------------------------------------------------------------------------------
-STATE_FIELDS = ("px", "py", "pvx", "pvy", "body", "bx", "by", "bvx", "bvy", "stamina", "effort", "recovery", "capacity")
-"""Player position (m), velocity (m/cycle, after decay), body (rad); ball position and velocity; stamina model."""
+STATE_FIELDS = (
+    "px", "py", "pvx", "pvy", "body", "bx", "by", "bvx", "bvy", "stamina", "effort", "recovery", "capacity", "frozen",
+)  # fmt: skip
+"""Player position (m), velocity (m/cycle, after decay), body (rad); ball position and velocity; stamina model;
+cycles the player stays frozen by its last tackle (its commands are refused while this is > 0)."""
 P_X, P_Y, P_VX, P_VY, P_BODY = (STATE_FIELDS.index(f) for f in ("px", "py", "pvx", "pvy", "body"))
 B_X, B_Y, B_VX, B_VY = (STATE_FIELDS.index(f) for f in ("bx", "by", "bvx", "bvy"))
 S_STAMINA, S_EFFORT, S_RECOVERY, S_CAPACITY = (STATE_FIELDS.index(f) for f in ("stamina", "effort", "recovery", "capacity"))
+S_FROZEN = STATE_FIELDS.index("frozen")
 STATE_SIZE = len(STATE_FIELDS)
 
 # --- player type columns (robocup_dribble.player_types.TYPE_FIELDS) ----------------------------------------------------
@@ -70,23 +74,26 @@ T_KICK_POWER_RATE = TYPE_FIELDS.index("kick_power_rate")
 TYPE_SIZE = len(TYPE_FIELDS)
 
 # --- commands: one main command per lane and cycle ---------------------------------------------------------------------
-COMMAND_FIELDS = ("kind", "power", "direction")  # power is the turn moment (degrees) for CMD_TURN
+COMMAND_FIELDS = ("kind", "power", "direction")  # power is the turn moment (degrees) for CMD_TURN, unused by CMD_TACKLE
 C_KIND, C_POWER, C_DIRECTION = (COMMAND_FIELDS.index(f) for f in COMMAND_FIELDS)
 COMMAND_SIZE = len(COMMAND_FIELDS)
-CMD_NONE, CMD_DASH, CMD_KICK, CMD_TURN = 0, 1, 2, 3
+CMD_NONE, CMD_DASH, CMD_KICK, CMD_TURN, CMD_TACKLE = 0, 1, 2, 3, 4
+N_COMMANDS = 5
 
 # --- roles of the uniform draws ---------------------------------------------------------------------------------------
 UNIFORM_FIELDS = ("kick_r", "kick_a", "ball_r", "ball_a", "player_r", "player_a", "turn", "collide")
-"""Kick noise (polar: radius, angle; box: x, y), ball and player movement noise (same), turn noise (and the v19
-bipedal dash rotation noise: only one of them per cycle), separation direction of a coincident ball and player."""
+"""Kick noise (polar: radius, angle; box: x, y; also a tackle's noise), ball and player movement noise (same), turn
+noise (also the v19 bipedal dash rotation noise and a tackle's success draw: only one of them per cycle), separation
+direction of a coincident ball and player (also of an object at the very centre of a goal post)."""
 U_KICK_R, U_KICK_A, U_BALL_R, U_BALL_A, U_PLAYER_R, U_PLAYER_A, U_TURN, U_COLLIDE = (
     UNIFORM_FIELDS.index(f) for f in UNIFORM_FIELDS
 )
 N_UNIFORMS = len(UNIFORM_FIELDS)
 
 # --- events reported by a step -----------------------------------------------------------------------------------------
-EVENT_FIELDS = ("collision", "kick_ok")
-E_COLLISION, E_KICK_OK = (EVENT_FIELDS.index(f) for f in EVENT_FIELDS)
+EVENT_FIELDS = ("collision", "kick_ok", "post")
+"""A ball-player collision happened; a kick was accepted; the player collided with a goal post."""
+E_COLLISION, E_KICK_OK, E_POST = (EVENT_FIELDS.index(f) for f in EVENT_FIELDS)
 EVENT_SIZE = len(EVENT_FIELDS)
 
 # --- server constants as one float vector (numba takes arrays, not dataclasses) ------------------------------------------
@@ -119,6 +126,16 @@ SERVER_CONSTANT_FIELDS = (
     "effort_dec",
     "effort_inc_thr",
     "effort_inc",
+    "goal_width",
+    "tackle_dist",
+    "tackle_back_dist",
+    "tackle_width",
+    "tackle_exponent",
+    "tackle_cycles",
+    "tackle_power_rate",
+    "max_tackle_power",
+    "max_back_tackle_power",
+    "tackle_rand_factor",
 )
 """The :class:`robocup_dribble.params.ServerParams` fields the kernel reads, under their own names."""
 BEHAVIOUR_FIELDS = ("bipedal", "dash_direction", "box_noise", "effort_bug")
@@ -153,6 +170,16 @@ CONSTANT_FIELDS = SERVER_CONSTANT_FIELDS + BEHAVIOUR_FIELDS
     K_EFFORT_DEC,
     K_EFFORT_INC_THR,
     K_EFFORT_INC,
+    K_GOAL_WIDTH,
+    K_TACKLE_DIST,
+    K_TACKLE_BACK_DIST,
+    K_TACKLE_WIDTH,
+    K_TACKLE_EXPONENT,
+    K_TACKLE_CYCLES,
+    K_TACKLE_POWER_RATE,
+    K_MAX_TACKLE_POWER,
+    K_MAX_BACK_TACKLE_POWER,
+    K_TACKLE_RAND_FACTOR,
     K_BIPEDAL,
     K_DASH_DIRECTION,
     K_BOX_NOISE,
@@ -196,7 +223,7 @@ def step(
     :param commands: ``(N, COMMAND_SIZE)`` float64: ``CMD_*`` kind, power (or turn moment), direction in degrees.
     :param uniforms: ``(N, N_UNIFORMS)`` float64 U[0, 1) draws (roles ``U_*``).
     :param constants: the vector from :func:`profile_constants`.
-    :return: ``(N, EVENT_SIZE)`` bool events: a ball-player collision happened, a kick was accepted.
+    :return: ``(N, EVENT_SIZE)`` bool events (:data:`EVENT_FIELDS`).
     :raises ValueError: for an array of the wrong shape or dtype; nothing changes.
     """
     check_array("state", state, (None, STATE_SIZE))
@@ -205,8 +232,8 @@ def step(
     commands = input_array("commands", commands, (n, COMMAND_SIZE))
     uniforms = input_array("uniforms", uniforms, (n, N_UNIFORMS))
     constants = input_array("constants", constants, (N_CONSTANTS,))
-    if not np.isin(commands[:, C_KIND], (CMD_NONE, CMD_DASH, CMD_KICK, CMD_TURN)).all():
-        raise ValueError(f"commands[:, {C_KIND}] must hold command kinds CMD_NONE..CMD_TURN (0..3)")
+    if not np.isin(commands[:, C_KIND], np.arange(N_COMMANDS)).all():
+        raise ValueError(f"commands[:, {C_KIND}] must hold command kinds CMD_NONE..CMD_TACKLE (0..{N_COMMANDS - 1})")
     events = np.zeros((n, EVENT_SIZE), dtype=np.bool_)
     _step_lanes(state, types, commands, uniforms, constants, events)
     return events
@@ -353,9 +380,127 @@ def _dash(power, direction, body, pvx, pvy, stamina, effort, dash_power_rate, pl
     return 0.5 * (lx + rx), 0.5 * (ly + ry), body, max(0.0, stamina - cost)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _nearest_post(x: float, y: float, goal_width: float) -> tuple[float, float]:
+    """The centre of the goal post the server tests an object at (x, y) against: the one in its quadrant."""
+    cx = PITCH_HALF_LENGTH - GOAL_POST_RADIUS
+    cy = 0.5 * goal_width + GOAL_POST_RADIUS
+    return (cx if x > 0.0 else -cx), (cy if y > 0.0 else -cy)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _angle(x: float, y: float) -> float:
+    """The direction of (x, y) in radians; 0 for the zero vector (the server's ``PVector::th``)."""
+    return 0.0 if x == 0.0 and y == 0.0 else math.atan2(y, x)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _between(px: float, py: float, bx: float, by: float, ex: float, ey: float) -> bool:
+    """The server's ``PVector::between``: p lies in the box spanned by b and e (ordered by x first)."""
+    if bx > ex:
+        bx, by, ex, ey = ex, ey, bx, by
+    if not bx <= px <= ex:
+        return False
+    return by <= py <= ey if by < ey else by >= py >= ey
+
+
 @njit(cache=True, error_model="numpy")
-def _move(x, y, vx, vy, ax, ay, accel_max, speed_max, rand, decay, u_r, u_a, box):
-    """``MPObject::_inc`` (docs/physics.md §5.1): returns the new position and the velocity after decay."""
+def _intersect(bx, by, ex, ey, cx, cy, radius):
+    """Where the segment b -> e first enters the circle (c, radius), as the server's ``intersect`` decides it
+    (docs/physics.md §6.3): returns (hit, x, y)."""
+    if bx == ex and by == ey:
+        return False, 0.0, 0.0
+    if norm(bx - ex, by - ey) < norm(bx - cx, by - cy) - radius:  # too short to reach the circle
+        return False, 0.0, 0.0
+    bx, by, ex, ey = bx - cx, by - cy, ex - cx, ey - cy  # the circle at the origin
+    dx, dy = ex - bx, ey - by
+    dr2 = dx * dx + dy * dy
+    d = bx * ey - ex * by
+    discriminant = radius * radius * dr2 - d * d
+    if discriminant <= 0.0:  # misses or touches
+        return False, 0.0, 0.0
+    root = math.sqrt(discriminant)
+    x1, x2 = (d * dy + dx * root) / dr2, (d * dy - dx * root) / dr2
+    y1, y2 = (-d * dx + abs(dy) * root) / dr2, (-d * dx - abs(dy) * root) / dr2
+    fx, fy, sx, sy = (x2, y1, x1, y2) if dy < 0.0 else (x1, y1, x2, y2)
+    first_in, second_in = _between(fx, fy, bx, by, ex, ey), _between(sx, sy, bx, by, ex, ey)
+    if not first_in and not second_in:
+        return False, 0.0, 0.0
+    if not first_in or (second_in and norm(bx - sx, by - sy) <= norm(bx - fx, by - fy)):
+        ix, iy, ox, oy = sx, sy, fx, fy
+    else:
+        ix, iy, ox, oy = fx, fy, sx, sy
+    if ix == bx and iy == by and not _between(ox, oy, bx, by, ex, ey):  # tangent and moving away
+        return False, 0.0, 0.0
+    return True, ix + cx, iy + cy
+
+
+@njit(cache=True, error_model="numpy")
+def _bounce_off_posts(x, y, vx, vy, size, goal_width, u):
+    """Goal posts inside ``MPObject::_inc`` (docs/physics.md §6.3) for an object of radius ``size`` at (x, y) about to
+    move by (vx, vy): pushed out of a post it overlaps, then reflected elastically where its path meets one.
+
+    Returns (collided with a post, x, y, vx, vy, end x, end y): the velocity keeps its length and takes the
+    reflected heading; (end x, end y) is where the object ends this cycle.
+    """
+    radius = GOAL_POST_RADIUS + size
+    cx, cy = _nearest_post(x, y, goal_width)
+    collided = False
+    for _ in range(8):  # inside a post: onto its edge (the server loops until outside every post; one push does it)
+        if norm(x - cx, y - cy) >= radius:
+            break
+        collided = True
+        dx, dy = x - cx, y - cy
+        if dx == 0.0 and dy == 0.0:
+            angle = _drand(-math.pi, math.pi, u)
+            dx, dy = radius * math.cos(angle), radius * math.sin(angle)
+        else:
+            scale = radius / max(norm(dx, dy), EPS)
+            dx, dy = dx * scale, dy * scale
+        x, y = cx + dx, cy + dy
+        while norm(x - cx, y - cy) < radius:  # rounding left it inside: 1 % further out
+            length = norm(dx, dy)
+            scale = length * 1.01 / max(length, EPS)
+            dx, dy = dx * scale, dy * scale
+            x, y = cx + dx, cy + dy
+        if vx != 0.0 or vy != 0.0:  # mirror the velocity's component along the line to the centre
+            a = _angle(cx - x, cy - y)
+            ca, sa = math.cos(a), math.sin(a)
+            along, across = vx * ca + vy * sa, -vx * sa + vy * ca
+            vx, vy = -along * ca - across * sa, -along * sa + across * ca
+        cx, cy = _nearest_post(x, y, goal_width)
+    ex, ey = x + vx, y + vy
+    sx, sy = _nearest_post(ex, ey, goal_width)
+    for _ in range(8):  # the path meets a post: bounce, and test the rest of the path again (the server: no bound)
+        if x == ex and y == ey:
+            break
+        hit, ix, iy = _intersect(x, y, ex, ey, cx, cy, radius)
+        hx, hy = cx, cy
+        if not hit and (sx != cx or sy != cy):
+            hit, ix, iy = _intersect(x, y, ex, ey, sx, sy, radius)
+            hx, hy = sx, sy
+        if not hit:
+            break
+        collided = True
+        rx, ry = ex - ix, ey - iy  # the rest of the path, reflected about the line to the post's centre
+        a = _angle(hx - ix, hy - iy)
+        # the server moves the contact point EPS away from the post, adding 180 to an angle in radians
+        x, y = ix + EPS * math.cos(a + 180.0), iy + EPS * math.sin(a + 180.0)
+        ca, sa = math.cos(a), math.sin(a)
+        along, across = rx * ca + ry * sa, -rx * sa + ry * ca
+        rx, ry = -along * ca - across * sa, -along * sa + across * ca
+        ex, ey = x + rx, y + ry
+        cx, cy = _nearest_post(x, y, goal_width)
+        sx, sy = _nearest_post(ex, ey, goal_width)
+        speed, heading = norm(vx, vy), _angle(rx, ry)
+        vx, vy = speed * math.cos(heading), speed * math.sin(heading)
+    return collided, x, y, vx, vy, ex, ey
+
+
+@njit(cache=True, error_model="numpy")
+def _move(x, y, vx, vy, ax, ay, accel_max, speed_max, rand, decay, u_r, u_a, box, size, goal_width, u_post):
+    """``MPObject::_inc`` (docs/physics.md §5.1, goal posts §6.3) for an object of radius ``size``: returns whether it
+    collided with a goal post, the new position and the velocity after decay."""
     if ax != 0.0 or ay != 0.0:  # both caps are skipped when there is no acceleration
         a = norm(ax, ay)
         if a > accel_max:
@@ -366,7 +511,11 @@ def _move(x, y, vx, vy, ax, ay, accel_max, speed_max, rand, decay, u_r, u_a, box
             vx, vy = vx * speed_max / v, vy * speed_max / v
     nx, ny = _noise(rand * norm(vx, vy), u_r, u_a, box)
     vx, vy = vx + nx, vy + ny
-    return x + vx, y + vy, decay * vx, decay * vy
+    ex, ey = x + vx, y + vy
+    posted = False
+    if max(abs(x), abs(ex)) >= PITCH_HALF_LENGTH - 2.0 * GOAL_POST_RADIUS - size:  # a goal post may be in reach
+        posted, x, y, vx, vy, ex, ey = _bounce_off_posts(x, y, vx, vy, size, goal_width, u_post)
+    return posted, ex, ey, decay * vx, decay * vy
 
 
 @njit(cache=True, error_model="numpy")
@@ -412,22 +561,68 @@ def _recover_lanes(state, types, lanes, k) -> None:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _tackle(px, py, body, bx, by, bvx, bvy, direction, kick_rand, u_success, u_r, u_a, k):
+    """A tackle (docs/physics.md §3.6, the v12+ model): the ball's acceleration (x, y), noise included, or (0, 0)
+    when it fails (ball out of reach, behind, or the success draw ``u_success`` above the success probability)."""
+    c, s = math.cos(-body), math.sin(-body)
+    rx, ry = bx - px, by - py
+    lx, ly = rx * c - ry * s, rx * s + ry * c  # the ball in the player's body frame
+    reach = k[K_TACKLE_DIST] if lx > 0.0 else k[K_TACKLE_BACK_DIST]
+    if abs(reach) <= 1e-5:
+        return 0.0, 0.0
+    exponent = k[K_TACKLE_EXPONENT]
+    fail = (abs(lx) / reach) ** exponent + (abs(ly) / k[K_TACKLE_WIDTH]) ** exponent
+    if fail >= 1.0 or u_success >= 1.0 - fail:
+        return 0.0, 0.0
+    angle = math.radians(min(max(direction, k[K_MIN_MOMENT]), k[K_MAX_MOMENT]))
+    back, front = k[K_MAX_BACK_TACKLE_POWER], k[K_MAX_TACKLE_POWER]
+    power = (back + (front - back) * (1.0 - abs(angle) / math.pi)) * k[K_TACKLE_POWER_RATE]
+    power *= 1.0 - 0.5 * abs(_angle(lx, ly)) / math.pi
+    ax, ay = power * math.cos(angle + body), power * math.sin(angle + body)
+    position_rate = 0.5 + 0.5 * (1.0 - fail)
+    speed_rate = 0.5 + 0.5 * norm(bvx, bvy) / (k[K_BALL_SPEED_MAX] * k[K_BALL_DECAY])
+    nx, ny = _noise(kick_rand * k[K_TACKLE_RAND_FACTOR] * (position_rate + speed_rate), u_r, u_a, False)
+    return ax + nx, ay + ny
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
     """One server cycle of lane ``i`` of ``state`` with the type in row ``ti`` of ``types`` and the draws in row ``ui``
-    of ``uniforms``, given the lane's command (``CMD_*`` kind, power or turn moment, direction in degrees).
+    of ``uniforms``, given the lane's command (``CMD_*`` kind, power or turn moment, direction in degrees). A frozen
+    player's command is refused (docs/physics.md §3.6).
 
-    :return: (a ball-player collision happened, a kick was accepted).
+    :return: (a ball-player collision happened, a kick was accepted, the player collided with a goal post).
     """
     px, py, pvx, pvy, body = state[i, P_X], state[i, P_Y], state[i, P_VX], state[i, P_VY], state[i, P_BODY]
     bx, by, bvx, bvy = state[i, B_X], state[i, B_Y], state[i, B_VX], state[i, B_VY]
     stamina, effort, recovery, capacity = state[i, S_STAMINA], state[i, S_EFFORT], state[i, S_RECOVERY], state[i, S_CAPACITY]
+    frozen = state[i, S_FROZEN]
     player_size, margin, ball_size = types[ti, T_SIZE], types[ti, T_KICKABLE_MARGIN], k[K_BALL_SIZE]
     box = k[K_BOX_NOISE] > 0.5
     ball_ax = ball_ay = player_ax = player_ay = 0.0
     kick_ok = False
+    if frozen > 0.0:
+        kind = CMD_NONE
 
     # 1. the command
-    if kind == CMD_KICK:  # docs/physics.md §3: the ball accelerates at command time
+    if kind == CMD_TACKLE:
+        frozen = k[K_TACKLE_CYCLES]
+        ball_ax, ball_ay = _tackle(
+            px,
+            py,
+            body,
+            bx,
+            by,
+            bvx,
+            bvy,
+            direction,
+            types[ti, T_KICK_RAND],
+            uniforms[ui, U_TURN],
+            uniforms[ui, U_KICK_R],
+            uniforms[ui, U_KICK_A],
+            k,
+        )
+    elif kind == CMD_KICK:  # docs/physics.md §3: the ball accelerates at command time
         power = min(max(power, k[K_MIN_POWER]), k[K_MAX_POWER])
         kick_direction = math.radians(min(max(direction, k[K_MIN_MOMENT]), k[K_MAX_MOMENT]))
         rx, ry = bx - px, by - py
@@ -469,8 +664,10 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
             k,
         )
 
+    frozen = max(frozen - 1.0, 0.0)  # the step starts by counting the tackle's cycles down
+
     # 2. movement (docs/physics.md §5)
-    bx, by, bvx, bvy = _move(
+    _, bx, by, bvx, bvy = _move(
         bx,
         by,
         bvx,
@@ -484,8 +681,11 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
         uniforms[ui, U_BALL_R],
         uniforms[ui, U_BALL_A],
         box,
+        ball_size,
+        k[K_GOAL_WIDTH],
+        uniforms[ui, U_COLLIDE],
     )
-    px, py, pvx, pvy = _move(
+    posted, px, py, pvx, pvy = _move(
         px,
         py,
         pvx,
@@ -499,6 +699,9 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
         uniforms[ui, U_PLAYER_R],
         uniforms[ui, U_PLAYER_A],
         box,
+        player_size,
+        k[K_GOAL_WIDTH],
+        uniforms[ui, U_COLLIDE],
     )
 
     # 3. collision (docs/physics.md §6.1): push apart, both velocities times -0.1
@@ -525,13 +728,14 @@ def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
     state[i, P_X], state[i, P_Y], state[i, P_VX], state[i, P_VY], state[i, P_BODY] = px, py, pvx, pvy, body
     state[i, B_X], state[i, B_Y], state[i, B_VX], state[i, B_VY] = bx, by, bvx, bvy
     state[i, S_STAMINA], state[i, S_EFFORT], state[i, S_RECOVERY], state[i, S_CAPACITY] = stamina, effort, recovery, capacity
-    return collided, kick_ok
+    state[i, S_FROZEN] = frozen
+    return collided, kick_ok, posted
 
 
 @njit(cache=True, error_model="numpy")
 def step_lane(s: np.ndarray, t: np.ndarray, c: np.ndarray, u: np.ndarray, k: np.ndarray, events: np.ndarray) -> None:
     """:func:`cycle` for one lane given as vectors (a state row, a type row, a command, its draws); writes ``events``."""
-    collided, kick_ok = cycle(
+    collided, kick_ok, posted = cycle(
         s.reshape((1, STATE_SIZE)),
         0,
         t.reshape((1, TYPE_SIZE)),
@@ -543,12 +747,12 @@ def step_lane(s: np.ndarray, t: np.ndarray, c: np.ndarray, u: np.ndarray, k: np.
         0,
         k,
     )
-    events[E_COLLISION], events[E_KICK_OK] = collided, kick_ok
+    events[E_COLLISION], events[E_KICK_OK], events[E_POST] = collided, kick_ok, posted
 
 
 @njit(cache=True, error_model="numpy")
 def _step_lanes(state, types, commands, uniforms, k, events) -> None:
     for i in range(state.shape[0]):
-        events[i, E_COLLISION], events[i, E_KICK_OK] = cycle(
+        events[i, E_COLLISION], events[i, E_KICK_OK], events[i, E_POST] = cycle(
             state, i, types, i, int(commands[i, C_KIND]), commands[i, C_POWER], commands[i, C_DIRECTION], uniforms, i, k
         )
