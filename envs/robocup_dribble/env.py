@@ -39,35 +39,36 @@ def configure(
     return server_profile, DribbleTask(**task_kwargs)
 
 
-def parse_action(action: Any) -> tuple[int, np.ndarray]:
-    """``(k, (p_dash, p_kick_velocity, p_kick_position, p_kick_align))`` -> ``(k, (7,) params)``.
+def parse_action(action: Any, action_params: tuple[tuple[str, ...], ...] = skills.ACTION_PARAMS) -> tuple[int, np.ndarray]:
+    """``(k, (p_0, ..., p_{K-1}))`` -> ``(k, flat params)`` for K action types whose parameters are named by
+    ``action_params`` (by default the dribbling skills': ``(k, (p_dash, p_kick_velocity, p_kick_position,
+    p_kick_align))`` -> ``(k, (7,) params)``).
 
     :raises ValueError: unless ``k`` is an integer (a Python or numpy integer, or an integral real number; not a
-        bool) in 0..3 and the parts are real vectors of sizes :data:`robocup_dribble.skills.PARAM_SIZES`.
+        bool) in 0..K-1 and the parts are real vectors of the sizes of ``action_params``.
     """
+    param_sizes = tuple(len(names) for names in action_params)
     try:
         action_type, parts = action
         sizes = tuple(part.size if type(part) is np.ndarray else np.size(part) for part in parts)
         params = np.concatenate(parts, axis=None, dtype=np.float64)  # axis=None flattens each part
     except (TypeError, ValueError) as error:
-        layout = ", ".join(f"{names[0].split('_')[0]} ({len(names)},)" for names in skills.ACTION_PARAMS)
+        layout = ", ".join(f"{names[0].split('_')[0]} ({len(names)},)" for names in action_params)
         raise ValueError(f"An action must be (action_type, ({layout})) with real parameters, got {action!r:.300}") from error
-    if sizes != skills.PARAM_SIZES:
-        raise ValueError(
-            f"The parameter vectors of an action must have sizes {skills.PARAM_SIZES}, got {sizes} in {action!r:.300}"
-        )
-    return action_type_index(action_type), params
+    if sizes != param_sizes:
+        raise ValueError(f"The parameter vectors of an action must have sizes {param_sizes}, got {sizes} in {action!r:.300}")
+    return action_type_index(action_type, len(action_params)), params
 
 
-def action_type_index(action_type: Any) -> int:
-    """``action_type`` as an int in 0..3; a Python or numpy integer or an integral real number, not a bool.
+def action_type_index(action_type: Any, n_types: int = skills.N_ACTION_TYPES) -> int:
+    """``action_type`` as an int in 0..n_types-1; a Python or numpy integer or an integral real number, not a bool.
 
     :raises ValueError: for anything else (None, a bool, a complex number, a string, 1.5, 7, ...).
     """
     if isinstance(action_type, (bool, np.bool_)) or not isinstance(action_type, (int, float, np.integer, np.floating)):
-        raise ValueError(f"The action type must be an integer in 0..{skills.N_ACTION_TYPES - 1}, got {action_type!r}")
-    if not (float(action_type).is_integer() and 0 <= action_type < skills.N_ACTION_TYPES):
-        raise ValueError(f"The action type must be an integer in 0..{skills.N_ACTION_TYPES - 1}, got {action_type!r}")
+        raise ValueError(f"The action type must be an integer in 0..{n_types - 1}, got {action_type!r}")
+    if not (float(action_type).is_integer() and 0 <= action_type < n_types):
+        raise ValueError(f"The action type must be an integer in 0..{n_types - 1}, got {action_type!r}")
     return int(action_type)
 
 

@@ -91,7 +91,7 @@ class ServerParams:
     tackle_back_dist: float = 0.0  # m: reach behind (0: no tackle behind)
     tackle_width: float = 1.25  # m: reach to the side
     tackle_exponent: float = 6.0  # of the failure probability (|x| / dist)^e + (|y| / width)^e
-    tackle_cycles: int = 10  # cycles a tackle freezes the player: its own and the next nine refuse every command
+    tackle_cycles: float = 10.0  # cycles a tackle freezes the player: its own and the next nine refuse every command
     tackle_power_rate: float = 0.027
     max_tackle_power: float = 100.0  # effective power of a tackle straight ahead
     max_back_tackle_power: float = 0.0  # ... and straight back
@@ -173,8 +173,8 @@ class ServerProfile:
                 raise ValueError(f"server.{name} must be >= 0, got {getattr(s, name)!r}")
         if s.min_power > s.max_power or s.min_dash_power > s.max_dash_power:
             raise ValueError("server power ranges must satisfy min <= max")
-        if isinstance(s.tackle_cycles, bool) or not isinstance(s.tackle_cycles, int) or s.tackle_cycles < 0:
-            raise ValueError(f"server.tackle_cycles must be an integer >= 0, got {s.tackle_cycles!r}")
+        if not (s.tackle_cycles >= 0 and float(s.tackle_cycles).is_integer()):
+            raise ValueError(f"server.tackle_cycles must be a whole number >= 0, got {s.tackle_cycles!r}")
         if not s.goal_width > 0:
             raise ValueError(f"server.goal_width must be > 0, got {s.goal_width!r}")
         if self.player.player_types < 1:

@@ -3,7 +3,8 @@
 Independent of the physics: the env fills a :class:`RenderFrame` and :class:`DribbleRenderer` draws it with
 pygame (imported lazily; install it with ``pip install "sb3-aac[render]"``).  Conventions are the server's
 monitor (``docs/physics.md`` §8): x to the right, +y *down* the screen, and a positive body
-angle turns clockwise on screen.  The camera follows the player horizontally.
+angle turns clockwise on screen.  The camera follows the player horizontally,
+or stays where it is told.
 """
 
 from __future__ import annotations
@@ -66,10 +67,17 @@ def _import_pygame() -> Any:
 
 
 class DribbleRenderer:
-    """Draw :class:`RenderFrame` s to a window (``"human"``) or to arrays (``"rgb_array"``)."""
+    """Draw :class:`RenderFrame` s to a window (``"human"``) or to arrays (``"rgb_array"``); the view is
+    ``view_width_m`` wide and follows the player, or stays centred on ``view_centre`` (m) when one is given."""
 
     def __init__(
-        self, render_mode: str, width: int = 720, height: int = 400, view_width_m: float = 24.0, fps: int = 10
+        self,
+        render_mode: str,
+        width: int = 720,
+        height: int = 400,
+        view_width_m: float = 24.0,
+        fps: int = 10,
+        view_centre: tuple[float, float] | None = None,
     ) -> None:
         if render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be one of {list(RENDER_MODES)}, got {render_mode!r}")
@@ -84,7 +92,8 @@ class DribbleRenderer:
         self._clock: Any = None
         self._font: Any = None
         self._small_font: Any = None
-        self._camera = (0.0, 0.0)
+        self._view_centre = view_centre
+        self._camera = (0.0, 0.0) if view_centre is None else view_centre
 
     # --- set-up -------------------------------------------------------------------------------
 
@@ -203,7 +212,8 @@ class DribbleRenderer:
         """Draw ``frame``: an ``(height, width, 3)`` uint8 array for ``"rgb_array"``, None for ``"human"``."""
         if self._pg is None:
             self._setup()
-        self._follow(frame)
+        if self._view_centre is None:
+            self._follow(frame)
         self._draw_pitch()
         self._draw_objects(frame)
         self._draw_caption(frame.caption)

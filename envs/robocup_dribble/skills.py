@@ -84,12 +84,13 @@ def action_space(profile: ServerProfile) -> spaces.Tuple[Any]:
     return spaces.Tuple((spaces.Discrete(N_ACTION_TYPES), spaces.Tuple(boxes)))
 
 
-def as_env_actions(action_types: np.ndarray, params: np.ndarray) -> np.ndarray:
-    """A batch ``(N,)`` types and ``(N, 7)`` parameters as an ``(N,)`` object array of per-lane Tuple actions."""
+def as_env_actions(action_types: np.ndarray, params: np.ndarray, param_slices: tuple[slice, ...] = PARAM_SLICES) -> np.ndarray:
+    """A batch ``(N,)`` types and ``(N, P)`` parameters as an ``(N,)`` object array of per-lane Tuple actions, each
+    action type's parameters the columns of its slice (by default the dribbling skills': P = 7)."""
     actions = np.empty(len(action_types), dtype=object)
     params32 = np.asarray(params, dtype=np.float32)
     for i, kind in enumerate(np.asarray(action_types).tolist()):
-        actions[i] = (kind, tuple(params32[i, s] for s in PARAM_SLICES))
+        actions[i] = (kind, tuple(params32[i, s] for s in param_slices))
     return actions
 
 

@@ -49,55 +49,20 @@ class ArrayStep(NamedTuple):
     (``(N,)`` bool), where ended."""
 
 
-class DribbleVecEnv(VecEnv):
-    """``n_envs`` dribbling lanes stepped by one compiled call: a Stable-Baselines3 ``VecEnv``.
+class LaneVecEnv(VecEnv):
+    """What every lane-based ``VecEnv`` of the env packages shares: SB3's ``VecEnv`` methods over lanes that step in
+    one call (no sub-environments), one seed for all lanes, and :meth:`step_packed`, SB3's return built from a
+    subclass's :meth:`step_arrays`.
 
-    Same physics, task and arguments (``perception`` included) as :class:`robocup_dribble.env.DribbleEnv` (one code path:
-    :class:`robocup_dribble.lanes.DribbleLanes`); with ``n_envs=1`` and the same seed it produces the same episodes.
-    Finished lanes reset automatically, inside the compiled step. All lanes draw from one generator seeded by
-    :meth:`seed` (the first seed).
-
-    Three ways to step, giving the same transitions:
-
-    * :meth:`step_arrays` (the array path of ``sb3_aac.common.array_env``): ``(N,)`` action types and ``(N, 7)``
-      parameters in, an :class:`ArrayStep` of arrays out; no per-lane Python object at all.
-    * :meth:`step_packed`: the same arrays in, SB3's ``(obs, rewards, dones, infos)`` out.
-    * :meth:`step` (SB3's form): a sequence of N per-lane Tuple actions in, SB3's return out. ``infos[i]`` carry
-      ``distance``, ``ball_lost`` and ``player_type``, and where an episode ended ``terminal_observation``,
-      ``TimeLimit.truncated`` and, like SB3's ``VecMonitor``, ``episode = {"r", "l", "t"}``.
+    A subclass sets ``_action_params`` (each action type's parameter names), implements :meth:`step_arrays` and
+    :meth:`_infos` (the per-lane ``info`` dicts of a step), may override :meth:`_episode_started` (called for each
+    lane whose episode ended and restarted), and sets ``_started`` in ``reset``.
     """
 
-    metadata = DribbleEnv.metadata
-
-    def __init__(
-        self,
-        n_envs: int,
-        profile: str | ServerProfile = "v19",
-        noise: bool = True,
-        render_mode: str | None = None,
-        perception: str = "full",
-        **task_kwargs: Any,
-    ) -> None:
-        self.profile, self.task = configure(profile, noise, render_mode, task_kwargs)
-        self._lanes = DribbleLanes(n_envs, self.profile, self.task, seeding.np_random()[0], perception)
-        self.render_mode = render_mode
-        super().__init__(n_envs, self._lanes.observation_space, skills.action_space(self.profile))
-        self.metadata = dict(DribbleEnv.metadata)  # VecEnv.__init__ replaced it with one lacking render_fps
-        self._all = np.arange(self.num_envs)
-        self._t_start = time.time()
-        self._player_types: list[Any] = [None] * self.num_envs
-        self._actions: np.ndarray | Sequence[Any] | None = None
-        self._renderer: Any = None
-        self._started = False
-
-    def reset(self) -> VecEnvObs:
-        if self._seeds[0] is not None:
-            self._lanes.reseed(seeding.np_random(self._seeds[0])[0])
-        self._reset_seeds()
-        obs = self._lanes.reset(self._all)
-        self._player_types = [self._lanes.player_type(i) for i in range(self.num_envs)]
-        self._started = True
-        return obs
+    _action_params: tuple[tuple[str, ...], ...]
+    _started = False
+    _t_start = 0.0
+    _actions: np.ndarray | Sequence[Any] | None = None
 
     def step_async(self, actions: np.ndarray | Sequence[Any]) -> None:
         self._actions = actions
@@ -107,27 +72,16 @@ class DribbleVecEnv(VecEnv):
         if actions is None or len(actions) != self.num_envs:
             got = None if actions is None else len(actions)
             raise ValueError(f"step() needs one action per lane ({self.num_envs}), got {got}")
-        return self.step_packed(*parse_actions(actions))
+        return self.step_packed(*parse_actions(actions, self._action_params))
 
     def step_arrays(self, action_types: np.ndarray, params: np.ndarray) -> ArrayStep:
-        """Step all lanes with ``(N,)`` action types and ``(N, 7)`` parameters (``robocup_dribble.skills.PARAM_*``
-        columns, env units; out-of-range values are clipped); lanes whose episode ended start the next one.
+        raise NotImplementedError
 
-        :raises ValueError: for a wrong shape, an action type outside 0..3, a non-finite parameter, or a call before
-            :meth:`reset`; nothing changes.
-        """
-        self._check_started()
-        out = self._lanes.step(action_types, params)
-        return ArrayStep(
-            out.observations,
-            out.rewards,
-            out.terminated,
-            out.truncated,
-            out.terminal_observations,
-            out.episode_returns,
-            out.episode_lengths,
-            {"distance": out.distances, "ball_lost": out.terminated},
-        )
+    def _infos(self, step: ArrayStep) -> list[dict[str, Any]]:
+        raise NotImplementedError
+
+    def _episode_started(self, lane: int) -> None:
+        """Lane ``lane`` ended an episode and started the next one (nothing to do by default)."""
 
     def step_packed(self, action_types: np.ndarray, params: np.ndarray) -> VecEnvStepReturn:
         """:meth:`step_arrays` with SB3's return: ``(obs, rewards float32, dones, infos)``."""
@@ -139,11 +93,7 @@ class DribbleVecEnv(VecEnv):
         collecting = gc.isenabled()
         gc.disable()
         try:
-            distances, lost = step.episode_info["distance"].tolist(), step.terminated.tolist()
-            infos = [
-                {"distance": d, "ball_lost": b, "player_type": t}
-                for d, b, t in zip(distances, lost, self._player_types, strict=True)
-            ]
+            infos = self._infos(step)
             if finished:
                 elapsed = round(time.time() - self._t_start, 6)
                 returns = step.episode_returns[finished].tolist()
@@ -154,35 +104,14 @@ class DribbleVecEnv(VecEnv):
                     info["terminal_observation"] = step.terminal_observations[i]
                     info["TimeLimit.truncated"] = timeouts[j]
                     info["episode"] = {"r": returns[j], "l": lengths[j], "t": elapsed}
-                    self._player_types[i] = self._lanes.player_type(i)
+                    self._episode_started(i)
         finally:
             if collecting:
                 gc.enable()
         return step.observations, step.rewards.astype(np.float32), dones, infos
 
-    def get_images(self) -> Sequence[np.ndarray | None]:
-        if self.render_mode != "rgb_array":
-            raise ValueError(f"get_images() needs render_mode='rgb_array', this env has {self.render_mode!r}")
-        self._check_started()
-        renderer = self._renderer_for("rgb_array")
-        return [renderer.render(render_frame(self._lanes, i, [], [])) for i in range(self.num_envs)]
-
-    def render(self, mode: str | None = None) -> np.ndarray | None:
-        """``"rgb_array"``: all lanes' frames tiled into one image (SB3's ``VecEnv.render``); ``"human"``: lane 0 in
-        a window."""
-        if self.render_mode == "human" and mode in (None, "human"):
-            self._check_started()
-            self._renderer_for("human").render(render_frame(self._lanes, 0, [], []))
-            return None
-        return super().render(mode)
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
     def seed(self, seed: int | None = None) -> Sequence[int | None]:
-        """Seed the lanes' generator with ``seed`` (an int, or None for a random one) at the next :meth:`reset`.
+        """Seed the lanes' generator with ``seed`` (an int, or None for a random one) at the next ``reset``.
 
         :raises ValueError: for anything but an int or None (lanes take one seed, not one per lane)
         """
@@ -208,7 +137,7 @@ class DribbleVecEnv(VecEnv):
     def env_method(
         self, method_name: str, *method_args: Any, indices: VecEnvIndices = None, **method_kwargs: Any
     ) -> list[Any]:
-        raise AttributeError(f"DribbleVecEnv has no per-lane sub-environments to call {method_name!r} on")
+        raise AttributeError(f"{type(self).__name__} has no per-lane sub-environments to call {method_name!r} on")
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
         """Lanes are not wrapped, but they report SB3 ``Monitor``'s episode statistics, so ``Monitor`` answers True
@@ -217,7 +146,108 @@ class DribbleVecEnv(VecEnv):
 
     def _check_started(self) -> None:
         if not self._started:
-            raise ValueError("Call reset() before stepping or rendering a DribbleVecEnv: no episode has started")
+            raise ValueError(f"Call reset() before stepping or rendering a {type(self).__name__}: no episode has started")
+
+
+class DribbleVecEnv(LaneVecEnv):
+    """``n_envs`` dribbling lanes stepped by one compiled call: a Stable-Baselines3 ``VecEnv``.
+
+    Same physics, task and arguments (``perception`` included) as :class:`robocup_dribble.env.DribbleEnv` (one code path:
+    :class:`robocup_dribble.lanes.DribbleLanes`); with ``n_envs=1`` and the same seed it produces the same episodes.
+    Finished lanes reset automatically, inside the compiled step. All lanes draw from one generator seeded by
+    :meth:`seed` (the first seed).
+
+    Three ways to step, giving the same transitions:
+
+    * :meth:`step_arrays` (the array path of ``sb3_aac.common.array_env``): ``(N,)`` action types and ``(N, 7)``
+      parameters in, an :class:`ArrayStep` of arrays out; no per-lane Python object at all.
+    * :meth:`step_packed`: the same arrays in, SB3's ``(obs, rewards, dones, infos)`` out.
+    * :meth:`step` (SB3's form): a sequence of N per-lane Tuple actions in, SB3's return out. ``infos[i]`` carry
+      ``distance``, ``ball_lost`` and ``player_type``, and where an episode ended ``terminal_observation``,
+      ``TimeLimit.truncated`` and, like SB3's ``VecMonitor``, ``episode = {"r", "l", "t"}``.
+    """
+
+    metadata = DribbleEnv.metadata
+    _action_params = skills.ACTION_PARAMS
+
+    def __init__(
+        self,
+        n_envs: int,
+        profile: str | ServerProfile = "v19",
+        noise: bool = True,
+        render_mode: str | None = None,
+        perception: str = "full",
+        **task_kwargs: Any,
+    ) -> None:
+        self.profile, self.task = configure(profile, noise, render_mode, task_kwargs)
+        self._lanes = DribbleLanes(n_envs, self.profile, self.task, seeding.np_random()[0], perception)
+        self.render_mode = render_mode
+        super().__init__(n_envs, self._lanes.observation_space, skills.action_space(self.profile))
+        self.metadata = dict(DribbleEnv.metadata)  # VecEnv.__init__ replaced it with one lacking render_fps
+        self._all = np.arange(self.num_envs)
+        self._t_start = time.time()
+        self._player_types: list[Any] = [None] * self.num_envs
+        self._renderer: Any = None
+
+    def reset(self) -> VecEnvObs:
+        if self._seeds[0] is not None:
+            self._lanes.reseed(seeding.np_random(self._seeds[0])[0])
+        self._reset_seeds()
+        obs = self._lanes.reset(self._all)
+        self._player_types = [self._lanes.player_type(i) for i in range(self.num_envs)]
+        self._started = True
+        return obs
+
+    def step_arrays(self, action_types: np.ndarray, params: np.ndarray) -> ArrayStep:
+        """Step all lanes with ``(N,)`` action types and ``(N, 7)`` parameters (``robocup_dribble.skills.PARAM_*``
+        columns, env units; out-of-range values are clipped); lanes whose episode ended start the next one.
+
+        :raises ValueError: for a wrong shape, an action type outside 0..3, a non-finite parameter, or a call before
+            :meth:`reset`; nothing changes.
+        """
+        self._check_started()
+        out = self._lanes.step(action_types, params)
+        return ArrayStep(
+            out.observations,
+            out.rewards,
+            out.terminated,
+            out.truncated,
+            out.terminal_observations,
+            out.episode_returns,
+            out.episode_lengths,
+            {"distance": out.distances, "ball_lost": out.terminated},
+        )
+
+    def _infos(self, step: ArrayStep) -> list[dict[str, Any]]:
+        distances, lost = step.episode_info["distance"].tolist(), step.terminated.tolist()
+        return [
+            {"distance": d, "ball_lost": b, "player_type": t}
+            for d, b, t in zip(distances, lost, self._player_types, strict=True)
+        ]
+
+    def _episode_started(self, lane: int) -> None:
+        self._player_types[lane] = self._lanes.player_type(lane)
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        if self.render_mode != "rgb_array":
+            raise ValueError(f"get_images() needs render_mode='rgb_array', this env has {self.render_mode!r}")
+        self._check_started()
+        renderer = self._renderer_for("rgb_array")
+        return [renderer.render(render_frame(self._lanes, i, [], [])) for i in range(self.num_envs)]
+
+    def render(self, mode: str | None = None) -> np.ndarray | None:
+        """``"rgb_array"``: all lanes' frames tiled into one image (SB3's ``VecEnv.render``); ``"human"``: lane 0 in
+        a window."""
+        if self.render_mode == "human" and mode in (None, "human"):
+            self._check_started()
+            self._renderer_for("human").render(render_frame(self._lanes, 0, [], []))
+            return None
+        return super().render(mode)
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
 
     def _renderer_for(self, mode: str) -> Any:
         from robocup_dribble.render import DribbleRenderer
@@ -227,8 +257,11 @@ class DribbleVecEnv(VecEnv):
         return self._renderer
 
 
-def parse_actions(actions: np.ndarray | Sequence[Any]) -> tuple[np.ndarray, np.ndarray]:
-    """N per-lane Tuple actions -> ``(N,)`` int64 action types and ``(N, 7)`` parameters.
+def parse_actions(
+    actions: np.ndarray | Sequence[Any], action_params: tuple[tuple[str, ...], ...] = skills.ACTION_PARAMS
+) -> tuple[np.ndarray, np.ndarray]:
+    """N per-lane Tuple actions -> ``(N,)`` int64 action types and ``(N, P)`` parameters, for action types whose
+    parameters are named by ``action_params`` (by default the dribbling skills': P = 7).
 
     The common case (integer types, real numpy parameter vectors of one dtype and the right sizes, as SB3 policies
     and the action space give them) is read in one pass over the vectors' bytes; anything else goes through
@@ -243,12 +276,13 @@ def parse_actions(actions: np.ndarray | Sequence[Any]) -> tuple[np.ndarray, np.n
         dtypes = {part.dtype for part in parts}
         if kinds.dtype.kind in "iu" and bool not in kind_types and np.bool_ not in kind_types and len(dtypes) == 1:
             dtype = dtypes.pop()
-            expected = [dtype.itemsize * size for size in skills.PARAM_SIZES] * len(actions)
+            sizes = [len(names) for names in action_params]
+            expected = [dtype.itemsize * size for size in sizes] * len(actions)
             if dtype.kind == "f" and [part.nbytes for part in parts] == expected:
                 joined = b"".join(parts)  # the vectors' buffers (a non-contiguous one raises BufferError)
-                params = np.frombuffer(joined, dtype=dtype).reshape(len(actions), skills.N_PARAMS)
+                params = np.frombuffer(joined, dtype=dtype).reshape(len(actions), sum(sizes))
                 return kinds.astype(np.int64, copy=False), params.astype(np.float64)
     except (TypeError, ValueError, AttributeError, IndexError, KeyError, BufferError):
         pass
-    parsed = [parse_action(action) for action in actions]
+    parsed = [parse_action(action, action_params) for action in actions]
     return np.array([k for k, _ in parsed], dtype=np.int64), np.stack([p for _, p in parsed])
