@@ -37,6 +37,7 @@ class HalfFieldOffenseVecEnv(LaneVecEnv):
         self.profile, self.task = configure(profile, noise, None, task_kwargs)
         self._lanes = HFOLanes(n_envs, self.profile, self.task, seeding.np_random()[0])
         self._action_params = actions.ACTION_PARAMS[: self._lanes.n_actions]
+        self.render_mode = None  # trials are drawn by the single env (HalfFieldOffenseEnv)
         super().__init__(n_envs, observation_space(), actions.action_space(self.task.tackle))
         self.metadata = dict(HalfFieldOffenseEnv.metadata)
         self._all = np.arange(self.num_envs)
