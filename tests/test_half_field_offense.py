@@ -509,3 +509,27 @@ def test_evaluation_is_paired_across_policies():
     np.testing.assert_array_equal(a.lengths, b.lengths)
     c = evaluate_offense(HandCodedOffense(shooting_distance=15.0), n_episodes=50, seed=3)
     assert not np.array_equal(a.lengths, c.lengths)
+
+
+def test_sarsa_aac_learns_to_score_on_a_short_field():
+    """The ball 10.5 m before the goal, the agent on it: 5,000 steps of SarsaAAC (a few seconds) learn to shoot."""
+    from sb3_aac import SarsaAAC
+
+    task = dict(offense_on_ball=True, ball_x_min=0.8, ball_x_max=0.8, ball_y_min=-0.2, ball_y_max=0.2)
+    env = HalfFieldOffenseVecEnv(8, **task)
+    env.seed(0)
+    model = SarsaAAC("DeepPolicy", env, seed=0)
+    assert evaluate_offense(model, 100, seed=1, **task).p_goal <= 0.05
+    model.learn(5_000)
+    assert evaluate_offense(model, 100, seed=1, **task).p_goal >= 0.5
+
+
+def test_a_trial_is_saved_as_a_gif(tmp_path):
+    pytest.importorskip("pygame")
+    imageio = pytest.importorskip("imageio.v2")
+    from half_field_offense.gif import save_trial_gif
+
+    status = save_trial_gif(HandCodedOffense(), tmp_path / "trial.gif", seed=0)
+    frames = imageio.mimread(tmp_path / "trial.gif")
+    assert status == "GOAL" and len(frames) > 20 and frames[0].shape == (700, 560, 3)
+    assert [p.name for p in tmp_path.iterdir()] == ["trial.gif"]

@@ -1,6 +1,6 @@
 """mkdocs hook: warn (an error under ``--strict``) when a module of the packages has no ``::: module`` line.
 
-Every module of ``sb3_aac``, ``robocup_dribble`` and ``hybrid_domains`` is rendered on exactly one page: an
+Every module of ``sb3_aac`` and of the env packages is rendered on exactly one page: an
 algorithm's modules on its algorithm page, the rest on an API reference page. A module added without a line in some
 page fails the build with a message saying where to add it. Package ``__init__`` files (re-exports) and the modules
 in :data:`NOT_RENDERED` are exempt.
@@ -19,6 +19,7 @@ PACKAGES = {
     "sb3_aac": Path("sb3_aac"),
     "robocup_dribble": Path("envs/robocup_dribble"),
     "hybrid_domains": Path("envs/hybrid_domains"),
+    "half_field_offense": Path("envs/half_field_offense"),
 }
 # module or package (with all its modules) -> the page that documents it instead of an API rendering
 NOT_RENDERED = {

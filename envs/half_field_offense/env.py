@@ -25,7 +25,7 @@ from robocup_dribble.params import ServerProfile, make_profile, without_noise
 PROFILE = "v15"
 """The server profile HFO's rcssserver 15.2.2 fork runs (:data:`robocup_dribble.params.PROFILES`)."""
 VIEW_CENTRE = (26.25, 0.0)  # m: the middle of the HFO area, where a rendered view stays
-VIEW_WIDTH = 60.0  # m
+VIEW_WIDTH = 57.0  # m: the HFO area and a margin, in 560 x 700 pixels
 
 
 def configure(
@@ -153,7 +153,7 @@ class HalfFieldOffenseEnv(gym.Env):
 
         if self._renderer is None:
             fps = self.metadata["render_fps"]
-            self._renderer = DribbleRenderer(self.render_mode, 720, 520, VIEW_WIDTH, fps, VIEW_CENTRE)
+            self._renderer = DribbleRenderer(self.render_mode, 560, 700, VIEW_WIDTH, fps, VIEW_CENTRE)
         frame = render_frame(self._lanes, 0, self._ball_trail, self._player_trail, referee.STATUS_NAMES[self._status])
         image: np.ndarray | None = self._renderer.render(frame)
         return image

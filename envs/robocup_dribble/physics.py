@@ -13,8 +13,10 @@ Formulas and their order follow the rcssserver source as restated in ``docs/phys
 (docs/physics.md §1):
 
 1. the command: a kick accelerates the ball at command time (docs/physics.md §3), a turn sets the body (§4), a dash
-   accelerates the player (§2; v19's two legs, §2.4, or the single-leg model, §2.3);
-2. movement of ball and player: acceleration cap, speed cap, noise, ``p += v``, ``v *= decay`` (docs/physics.md §5);
+   accelerates the player (§2; v19's two legs, §2.4, or the single-leg model, §2.3), a tackle may push the ball and
+   freezes the player (§3.7; a frozen player's command is refused), and the frozen count goes down;
+2. movement of ball and player: acceleration cap, speed cap, noise, goal posts near the goal lines (§6.3),
+   ``p += v``, ``v *= decay`` (docs/physics.md §5);
 3. ball-player collision on the new positions: midpoint push-out, velocities times -0.1 (docs/physics.md §6.1);
 4. stamina, effort and recovery update (docs/physics.md §2.5).
 
@@ -562,7 +564,7 @@ def _recover_lanes(state, types, lanes, k) -> None:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _tackle(px, py, body, bx, by, bvx, bvy, direction, kick_rand, u_success, u_r, u_a, k):
-    """A tackle (docs/physics.md §3.6, the v12+ model): the ball's acceleration (x, y), noise included, or (0, 0)
+    """A tackle (docs/physics.md §3.7, the v12+ model): the ball's acceleration (x, y), noise included, or (0, 0)
     when it fails (ball out of reach, behind, or the success draw ``u_success`` above the success probability)."""
     c, s = math.cos(-body), math.sin(-body)
     rx, ry = bx - px, by - py
@@ -589,7 +591,7 @@ def _tackle(px, py, body, bx, by, bvx, bvy, direction, kick_rand, u_success, u_r
 def cycle(state, i, types, ti, kind, power, direction, uniforms, ui, k):
     """One server cycle of lane ``i`` of ``state`` with the type in row ``ti`` of ``types`` and the draws in row ``ui``
     of ``uniforms``, given the lane's command (``CMD_*`` kind, power or turn moment, direction in degrees). A frozen
-    player's command is refused (docs/physics.md §3.6).
+    player's command is refused (docs/physics.md §3.7).
 
     :return: (a ball-player collision happened, a kick was accepted, the player collided with a goal post).
     """
