@@ -24,7 +24,7 @@ def save_trial_gif(policy: Any, path: str | Path, seed: int = 0, fps: int = 10, 
 
     env = HalfFieldOffenseEnv(render_mode="rgb_array", **env_kwargs)
     obs, info = env.reset(seed=seed)
-    frames = [env.render()]
+    frames: list[Any] = [env.render()]
     while True:
         action, _ = policy.predict(obs, deterministic=True)
         obs, _, terminated, truncated, info = env.step(action)

@@ -44,7 +44,7 @@ def vector_rate(n: int, kinds: np.ndarray | None, params: np.ndarray | None, sec
     """``HalfFieldOffenseVecEnv(n).step_arrays`` agent-steps/s on a stream (the hand-coded agent's when None)."""
     vec = HalfFieldOffenseVecEnv(n)
     vec.seed(0)
-    obs = vec.reset()
+    obs = np.asarray(vec.reset())
     agent = HandCodedOffense()
 
     def run(k: int) -> int:
