@@ -533,3 +533,12 @@ def test_a_trial_is_saved_as_a_gif(tmp_path):
     frames = imageio.mimread(tmp_path / "trial.gif")
     assert status == "GOAL" and len(frames) > 20 and frames[0].shape == (700, 560, 3)
     assert [p.name for p in tmp_path.iterdir()] == ["trial.gif"]
+
+
+def test_the_command_line_trains_on_half_field_offense(tmp_path, capsys):
+    from sb3_aac.cli import main
+
+    argv = ["train", "--env", "HalfFieldOffense-v0", "--policy", "DeepPolicy", "--timesteps", "600", "--n-envs", "4"]
+    assert main([*argv, "--eval-episodes", "3", "--out", str(tmp_path / "run")]) == 0
+    out = capsys.readouterr().out
+    assert "HalfFieldOffense-v0" in out and (tmp_path / "run" / "model.zip").exists()

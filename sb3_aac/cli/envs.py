@@ -1,10 +1,12 @@
-"""The envs the commands train and play: the dribbling ids and their server profiles, the toy env, envs other packages
-register (``--gym-package``), and the training env of an id."""
+"""The envs the commands train and play: the dribbling ids and their server profiles, Half Field Offense, the toy env,
+envs other packages register (``--gym-package``), and the training env of an id."""
 
 from __future__ import annotations
 
 from typing import Any
 
+import half_field_offense
+from half_field_offense import HFOTask
 from robocup_dribble import ENV_PROFILES
 from robocup_dribble.perception import PERCEPTIONS
 from sb3_aac.cli.arguments import CliError
@@ -29,7 +31,7 @@ def check_env_id(env_id: str) -> None:
 
     register_toy_env()
     if env_id not in gym.registry:
-        known = [*DRIBBLE_IDS, TOY_ENV_ID]
+        known = [*DRIBBLE_IDS, half_field_offense.ENV_ID, TOY_ENV_ID]
         raise CliError(
             f"unknown env id {env_id!r}; sb3-aac's ids are {known}. For another parameterized-action env, register it "
             "with gymnasium and pass the module that registers it with --gym-package MODULE"
@@ -43,6 +45,8 @@ def max_episode_length(env_id: str) -> int:
         from robocup_dribble import DribbleTask
 
         return DribbleTask().max_actions
+    if env_id == half_field_offense.ENV_ID:
+        return HFOTask().frames_per_trial + 1
     spec = gym.spec(env_id)
     if spec.max_episode_steps is not None:
         return int(spec.max_episode_steps)
@@ -73,6 +77,10 @@ def make_train_env(env_id: str, n_envs: int, seed: int | None, perception: str =
         return env
     if perception != "full":
         raise CliError(f"--perception {perception} is an option of the dribbling envs {sorted(DRIBBLE_IDS)}, not of {env_id}")
+    if env_id == half_field_offense.ENV_ID:
+        env = half_field_offense.HalfFieldOffenseVecEnv(n_envs)
+        env.seed(seed)
+        return env
     from stable_baselines3.common.env_util import make_vec_env
 
     try:
