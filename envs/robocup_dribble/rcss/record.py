@@ -114,28 +114,8 @@ def _printed(value: float) -> float:
     return float(f"{value:.6g}")
 
 
-def _sense(sense_body: str) -> tuple[list[str], int]:
-    """The collisions ``["ball", "post", ...]`` and the tackle countdown (``(tackle (expires N) ...)``) of a
-    ``(sense_body ...)``."""
-    collisions: list[str] = []
-    expires = -1
-    for item in protocol.parse(sense_body)[2:]:
-        if not isinstance(item, list) or not item:
-            continue
-        if item[0] == "collision":
-            collisions = [str(part[0]) for part in item[1:] if isinstance(part, list) and part]
-        elif item[0] == "tackle":
-            for part in item[1:]:
-                if isinstance(part, list) and len(part) == 2 and part[0] == "expires":
-                    expires = int(str(part[1]))
-    if expires < 0:
-        raise protocol.ProtocolError(f"sense_body without (tackle (expires N) ...): {sense_body[:200]!r}")
-    return collisions, expires
-
-
 def _state(window: Window) -> dict[str, Any]:
     s = window.fullstate.state
-    collisions, expires = _sense(window.sense_body)
     return {
         "time": window.fullstate.time,
         "play_mode": window.fullstate.play_mode,
@@ -156,9 +136,9 @@ def _state(window: Window) -> dict[str, Any]:
         "effort": _printed(s[physics.S_EFFORT]),
         "recovery": _printed(s[physics.S_RECOVERY]),
         "stamina_capacity": _printed(s[physics.S_CAPACITY]),
-        "collision": collisions,
+        "collision": protocol.read_collisions(window.sense_body),
         "kick_ok": None,
-        "tackle_expires": expires,
+        "tackle_expires": protocol.read_tackle_expires(window.sense_body),
     }
 
 
