@@ -19,7 +19,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import robocup_dribble
-from robocup_dribble import physics, skills
+from robocup_dribble import physics, skills, validate
 from robocup_dribble.dribbler import HandCodedDribbler
 from robocup_dribble.evaluation import evaluate_dribbling, evaluate_episodes
 from robocup_dribble.player_types import generate_player_types, stack_player_types
@@ -36,7 +36,7 @@ from robocup_dribble.rcss import (
     play_on_server,
     server_episodes,
 )
-from robocup_dribble.rcss import perception, protocol
+from robocup_dribble.rcss import perception, protocol, record
 from robocup_dribble.rcss.server import Endpoint
 
 SESSION = Path(robocup_dribble.__file__).parent / "data" / "rcss" / "session-v19.jsonl"
@@ -129,6 +129,16 @@ def test_collision_reader_counts_the_recorded_collisions() -> None:
     bodies = received("sense_body")
     assert sum(protocol.read_collision(text) for text in bodies) == sum("(collision (ball))" in t for t in bodies) > 0
     assert not all(protocol.read_collision(text) for text in bodies)
+
+
+def test_collisions_and_tackle_countdown_readers() -> None:
+    bodies = received("sense_body")
+    assert [protocol.read_collisions(text) == ["ball"] for text in bodies] == [protocol.read_collision(t) for t in bodies]
+    assert {protocol.read_tackle_expires(text) for text in bodies} == {0}  # the session has no tackle
+    frozen = "(sense_body 9 (stamina 8000 1 130600) (tackle (expires 7) (count 1)) (collision (ball) (post)))"
+    assert protocol.read_collisions(frozen) == ["ball", "post"] and protocol.read_tackle_expires(frozen) == 7
+    with pytest.raises(ProtocolError, match="without \\(tackle"):
+        protocol.read_tackle_expires("(sense_body 9 (collision none))")
 
 
 def test_look_reader_on_the_recorded_placements() -> None:
@@ -528,3 +538,16 @@ def test_a_policy_plays_on_its_own_perception_on_the_real_server() -> None:
     episodes = server_episodes(20, world_seed=1, seed=2)
     report = play_on_server(HandCodedDribbler("v19"), episodes, server=REAL_SERVER, perceive=True)
     assert report.mean_distance > 10  # it dribbles, if worse than on the exact state (docs/pitch.md)
+
+
+@pytest.mark.skipif(
+    REAL_SERVER is None, reason="no rcssserver binary: set RCSSSERVER or put rcssserver on PATH (docs/pitch.md)"
+)
+def test_the_recorder_records_the_shipped_goal_cases_and_they_replay(tmp_path: Path) -> None:
+    assert REAL_SERVER is not None
+    path = tmp_path / "goal.jsonl"
+    assert record.record(REAL_SERVER, path) == len(record.CASES)
+    fresh = list(validate.read_cases(path))
+    shipped = list(validate.read_cases(validate.GOLDEN_DIR / "rcss-goal.jsonl"))
+    assert [(c["id"], c["setup"], c["commands"]) for c in fresh] == [(c["id"], c["setup"], c["commands"]) for c in shipped]
+    assert all(validate.replay_case(case).passed for case in fresh)

@@ -5,11 +5,12 @@ Usage::
     python -m robocup_dribble.validate [CASES.jsonl ...] [--verbose]
 
 Without files it replays the rcssserver 19.0.0 recordings shipped in :data:`GOLDEN_DIR` (``robocup_dribble/data/
-golden``, provenance and format in its ``README.md``). Each line of a file is one recorded case in that format: the
-server options, the
-player type, the exact set-up, one command (or none) per cycle and the state the server printed after each cycle.
+golden``, provenance and format in its ``README.md``): the dribbling cases and the cases at the goals (goal posts,
+tackles, kicks over the goal line). Each line of a file is one recorded case in that format: the server options,
+the player type, the exact set-up, one command (or none) per cycle and the state the server printed after each cycle.
 The case is replayed from its set-up with a profile built from the recorded ``server::`` options and every printed
-number is compared with a tolerance of ``rtol * |recorded| + atol`` (the server prints 6 significant digits).
+number is compared with a tolerance of ``rtol * |recorded| + atol`` (the server prints 6 significant digits); the
+ball and post collisions of ``collision`` and, where recorded, the tackle countdown ``tackle_expires`` must agree.
 A case with a heterogeneous player type takes the type from :func:`generate_player_types` with the recorded
 ``player::random_seed`` and ``player::kick_rand_delta_factor``, not from the rounded printed values.
 
@@ -37,7 +38,7 @@ from robocup_dribble.player_types import PlayerType, default_player_type, genera
 
 GOLDEN_DIR = Path(__file__).resolve().parent / "data" / "golden"
 """The recorded rcssserver 19.0.0 cases shipped with the package (see its README.md)."""
-GOLDEN_FILES = ("rcss-deterministic.jsonl", "rcss-noise.jsonl")
+GOLDEN_FILES = ("rcss-deterministic.jsonl", "rcss-goal.jsonl", "rcss-noise.jsonl")
 """The files replayed when no file is given."""
 RTOL = 1e-5  # the server prints 6 significant digits
 ATOL = 1e-6
@@ -55,7 +56,7 @@ _COMPARED: tuple[tuple[str, Callable[[dict[str, Any]], float], int], ...] = (
     ("recovery", lambda s: s["recovery"], physics.S_RECOVERY),
     ("stamina_capacity", lambda s: s["stamina_capacity"], physics.S_CAPACITY),
 )
-_COMMANDS = {"dash": physics.CMD_DASH, "kick": physics.CMD_KICK, "turn": physics.CMD_TURN}
+_COMMANDS = {"dash": physics.CMD_DASH, "kick": physics.CMD_KICK, "turn": physics.CMD_TURN, "tackle": physics.CMD_TACKLE}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -113,13 +114,16 @@ def case_player_type(case: dict[str, Any], profile: ServerProfile) -> PlayerType
 
 
 def parse_command(text: str | None) -> tuple[int, float, float]:
-    """``"(dash 100 45)"`` -> ``(CMD_DASH, 100.0, 45.0)``; ``None`` -> no command."""
+    """``"(dash 100 45)"`` -> ``(CMD_DASH, 100.0, 45.0)``; ``"(tackle 30)"`` -> ``(CMD_TACKLE, 0.0, 30.0)`` (the v12+
+    tackle's argument is its direction); ``None`` -> no command."""
     if text is None:
         return physics.CMD_NONE, 0.0, 0.0
     words = text.strip().strip("()").split()
     if not words or words[0] not in _COMMANDS or not 2 <= len(words) <= 3:
-        raise ValueError(f"unsupported command {text!r}; expected (dash P [D]), (kick P D) or (turn M)")
+        raise ValueError(f"unsupported command {text!r}; expected (dash P [D]), (kick P D), (turn M) or (tackle D)")
     values = [float(word) for word in words[1:]]
+    if words[0] == "tackle":
+        return physics.CMD_TACKLE, 0.0, values[0]
     return _COMMANDS[words[0]], values[0], values[1] if len(values) > 1 else 0.0
 
 
@@ -151,9 +155,14 @@ def simulate_case(
     return np.stack(states, axis=1), np.stack(events, axis=1)
 
 
-def replay_case(case: dict[str, Any], rtol: float = RTOL, atol: float = ATOL) -> CaseResult:
-    """Replay one deterministic case and measure its largest deviation from the recording."""
-    states, events = simulate_case(case)
+def replay_case(
+    case: dict[str, Any], rtol: float = RTOL, atol: float = ATOL, profile: ServerProfile | None = None
+) -> CaseResult:
+    """Replay one deterministic case and measure its largest deviation from the recording.
+
+    :param profile: the server profile to simulate; default :func:`case_profile` (the recorded server).
+    """
+    states, events = simulate_case(case, profile=profile)
     worst = (0.0, 0.0, "", 0)  # ratio, abs error, field, cycle
     mismatches: list[str] = []
     for cycle, (command, recorded) in enumerate(zip(case["commands"], case["states"], strict=True), start=1):
@@ -163,9 +172,12 @@ def replay_case(case: dict[str, Any], rtol: float = RTOL, atol: float = ATOL) ->
         body = math.degrees(state[physics.P_BODY])
         body_error = abs((body - recorded["player"]["body"] + 180.0) % 360.0 - 180.0)
         worst = max(worst, (body_error / (rtol * abs(recorded["player"]["body"]) + 1e-4), body_error, "player.body", cycle))
-        collided = "ball" in recorded.get("collision", [])
-        if bool(event[physics.E_COLLISION]) != collided:
-            mismatches.append(f"collision at cycle {cycle}: recorded {collided}")
+        for flag, column in (("ball", physics.E_COLLISION), ("post", physics.E_POST)):
+            collided = flag in recorded.get("collision", [])
+            if bool(event[column]) != collided:
+                mismatches.append(f"{flag} collision at cycle {cycle}: recorded {collided}")
+        if "tackle_expires" in recorded and state[physics.S_FROZEN] != recorded["tackle_expires"]:
+            mismatches.append(f"tackle countdown at cycle {cycle}: recorded {recorded['tackle_expires']}")
         if recorded.get("kick_ok") is not None and command and command.startswith("(kick"):
             if bool(event[physics.E_KICK_OK]) != recorded["kick_ok"]:
                 mismatches.append(f"kick_ok at cycle {cycle}: recorded {recorded['kick_ok']}")

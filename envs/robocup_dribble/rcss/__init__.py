@@ -5,6 +5,7 @@ episodes through the env's observation, skills and rules (:mod:`~robocup_dribble
 :func:`play_on_server` is the one-call entry: the episodes of one server world on a server binary it starts and
 stops, returning a :class:`robocup_dribble.evaluation.DribbleReport` comparable with the env's
 (:func:`robocup_dribble.evaluation.evaluate_episodes` on the same :class:`ServerEpisodes`).
+``python -m robocup_dribble.rcss.record`` records the golden cases at the goals (:mod:`~robocup_dribble.rcss.record`).
 """
 
 from robocup_dribble.rcss.client import (

@@ -271,7 +271,7 @@ class ServerSession:
         returns ``(distance, ball_lost)`` by the env's rules on the server's state. The policy's observation and
         the skills' commands come from that state, or with ``perceive`` from the player's estimate of it
         (:class:`robocup_dribble.rcss.perception.PerceivedWorld`)."""
-        self._place(type_id, start)
+        self.place(type_id, start)
         state = start.reshape(1, physics.STATE_SIZE).copy()
         believed = state[0].copy()  # what the policy and the skills act on
         world = PerceivedWorld(self.profile)
@@ -285,10 +285,9 @@ class ServerSession:
             clipped = np.clip(params[0], self._param_low, self._param_high)
             skills.command_lane(believed, types[0], int(kinds[0]), clipped, self._k, command)
             previous_x = float(state[0, physics.P_X])
-            self.player.send(
+            window = self.act(
                 protocol.player_command(int(command[physics.C_KIND]), command[physics.C_POWER], command[physics.C_DIRECTION])
             )
-            window = self._finish_cycle()
             if window.fullstate.player_type != type_id:
                 raise ServerError(f"the server reports player type {window.fullstate.player_type}, the episode set {type_id}")
             state[0] = window.fullstate.state
@@ -312,8 +311,9 @@ class ServerSession:
         task.observe(states, 0, types, 0, self._obs_low, self._obs_high, obs, 0)
         return obs
 
-    def _place(self, type_id: int, start: np.ndarray) -> None:
-        """Set the episode up in the current think window: type, recovery, ball parked, player and ball placed."""
+    def place(self, type_id: int, start: np.ndarray) -> None:
+        """Set an episode up in the current think window: type ``type_id``, recovery, ball parked, player and ball
+        placed as in ``start`` ``(STATE_SIZE,)``; the trainer's look must confirm the placement."""
         if type_id != self.player_type:
             self._trainer_command(protocol.change_player_type(TEAM, UNUM, type_id))
             self.player_type = type_id
@@ -331,6 +331,13 @@ class ServerSession:
             raise ServerError(
                 f"the trainer's look shows player and ball at {placed.tolist()}, they were placed at {expected.tolist()}"
             )
+
+    def act(self, command: str | None) -> Window:
+        """Send the player's ``command`` (None: none) in the current think window and play one cycle: the next
+        :class:`Window`."""
+        if command is not None:
+            self.player.send(command)
+        return self._finish_cycle()
 
     def _trainer_command(self, command: str) -> str:
         """Send a trainer command and return its ``(ok ...)`` answer."""

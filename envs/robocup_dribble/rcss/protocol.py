@@ -160,13 +160,33 @@ def read_look(message: str, team: str, unum: int) -> np.ndarray:
 
 def read_collision(message: str) -> bool:
     """Whether a ``(sense_body ...)`` reports a ball-player collision in the last cycle (``(collision (ball))``)."""
+    return "ball" in read_collisions(message)
+
+
+def read_collisions(message: str) -> list[str]:
+    """What the player collided with in the last cycle by its ``(sense_body ...)``: ``[]`` for ``(collision none)``,
+    else the names of ``(collision (ball) (player) (post))`` in the message's order."""
+    item = _sense_body_item(message, "collision")
+    return [str(part[0]) for part in item[1:] if isinstance(part, list) and len(part) == 1]
+
+
+def read_tackle_expires(message: str) -> int:
+    """The cycles the player's last tackle still freezes it for, by its ``(sense_body ...)``
+    (``(tackle (expires N) (count C))``; 0 when not frozen)."""
+    for part in _sense_body_item(message, "tackle")[1:]:
+        if isinstance(part, list) and len(part) == 2 and part[0] == "expires":
+            return int(_numbers([part[1]], "tackle expires")[0])
+    raise ProtocolError(f"sense_body without (tackle (expires N) ...): {message[:200]!r}")
+
+
+def _sense_body_item(message: str, name: str) -> list[Expression]:
     tree = parse(message)
     if tree[0] != "sense_body":
         raise ProtocolError(f"expected (sense_body TIME ...), got {message[:100]!r}")
     for item in tree[2:]:
-        if isinstance(item, list) and item and item[0] == "collision":
-            return any(part == ["ball"] for part in item[1:])
-    raise ProtocolError(f"sense_body without (collision ...): {message[:200]!r}")
+        if isinstance(item, list) and item and item[0] == name:
+            return item
+    raise ProtocolError(f"sense_body without ({name} ...): {message[:200]!r}")
 
 
 def _numbers(items: list[Expression], what: str) -> list[float]:
