@@ -16,6 +16,7 @@ from sb3_aac.cli.arguments import (
     key_value,
     lane_count,
     output_dir,
+    require_extra,
     seed_int,
     step_count,
 )
@@ -96,6 +97,8 @@ def add_train_command(add: Any) -> None:
 
 def cmd_train(args: argparse.Namespace) -> None:
     """Check everything the user named, then train, save and evaluate; each file of ``--out`` is the old or a whole new one."""
+    if args.progress_bar:
+        require_extra("progress", "--progress-bar", "tqdm", "rich")
     import_gym_packages(args.gym_package)
     check_env_id(args.env)
     kwargs = hyperparameters(args.set, args.algo)
