@@ -138,6 +138,40 @@ def test_an_empty_batch_is_one_clear_error_everywhere(case, tmp_path) -> None:
             call(empty)
 
 
+@algos(ALGO_CLASSES)
+def test_an_observation_no_policy_can_take_is_named_for_what_it_is(case, tmp_path) -> None:
+    """Complex numbers, finite values beyond float32 (not "NaN or inf"), and a Dict space (no MultiInputPolicy here)."""
+    from sb3_aac import RuntimePolicy, export_policy
+
+    model = case.make(ParameterizedTargetEnv(), seed=0)
+    obs = model.observation_space.sample()
+    with pytest.raises(ValueError, match="holds complex numbers: observations are real"):
+        model.predict(obs + 1j, deterministic=True)
+    with pytest.raises(ValueError, match=r"values beyond float32's range \(\|x\| > 3.4e\+38\)"):
+        model.predict(np.full(obs.shape, 1e300), deterministic=True)
+    runtime = RuntimePolicy.load(export_policy(model, tmp_path / "policy.aacp"))
+    with pytest.raises(ValueError, match="too large to compute with"):
+        runtime.act(np.full(obs.shape, 1e300))
+    env = ParameterizedTargetEnv()
+    env.observation_space = spaces.Dict({"position": env.observation_space})
+    with pytest.raises(ValueError, match=r"sb3-aac's policies take a Box observation .*FlattenObservation") as error:
+        case.make(env)
+    assert "MultiInputPolicy" not in str(error.value)
+
+
+def test_one_hybrid_ppo_shared_by_threads_decides_as_alone() -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    from sb3_aac import HybridPPO
+
+    model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(), seed=0)
+    obs = np.stack([model.observation_space.sample() for _ in range(400)])
+    alone = [model.predict(o, deterministic=True)[0] for o in obs]
+    with ThreadPoolExecutor(4) as pool:
+        shared = list(pool.map(lambda o: model.predict(o, deterministic=True)[0], obs))
+    assert all(a[0] == b[0] and np.array_equal(a[1][a[0]], b[1][b[0]]) for a, b in zip(alone, shared, strict=True))
+
+
 def test_one_runtime_policy_shared_by_threads_decides_as_alone(tmp_path) -> None:
     from concurrent.futures import ThreadPoolExecutor
 
