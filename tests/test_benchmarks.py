@@ -573,6 +573,8 @@ def test_a_cell_file_with_a_wrong_typed_field_is_damaged(tmp_path, field, value)
     ("argv", "message"),
     [
         (["--only", "no-such-cell"], "matches none of the"),
+        (["--only", ""], "expected at least one pattern"),
+        (["--only", " , "], "expected at least one pattern"),
         (["--workers", "-3"], "must be >= 1"),
         (["--workers", "two"], "expected a whole number"),
         (["--players", "0"], "must be >= 1"),

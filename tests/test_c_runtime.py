@@ -71,7 +71,9 @@ def drivers(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path | str]:
 
 def run(driver: Path, *args: str) -> str:
     """The driver's stdout; it must exit 0 with nothing on stderr (no sanitizer report)."""
-    result = subprocess.run([str(driver), *args], capture_output=True, check=False, env={**os.environ, **SANITIZER_ENV})
+    result = subprocess.run(
+        [str(driver), *args], capture_output=True, check=False, timeout=300, env={**os.environ, **SANITIZER_ENV}
+    )
     stderr = result.stderr.decode(errors="replace")
     assert result.returncode == 0 and not stderr, f"{driver.name} {args[:2]}: exit {result.returncode}\n{stderr[-3000:]}"
     return result.stdout.decode(errors="replace")
@@ -542,11 +544,14 @@ def test_refuses_what_the_python_reader_refuses(source: str, good_files, drivers
 
 def test_files_by_name(policy_files, drivers, tmp_path: Path) -> None:
     """aacp_load_file takes the name export_policy was given (".aacp" appended), and refuses a directory, a missing
-    file and a link to an endless device (after reading its first bytes)."""
+    file, a link to an endless device (after reading its first bytes) and a named pipe (without waiting for a writer)."""
     path, _ = policy_files["RbfPolicy-nested"]
     (tmp_path / "folder.aacp").mkdir()
+    os.mkfifo(tmp_path / "fifo.aacp")
     names = [str(path)[: -len(".aacp")], str(tmp_path / "folder.aacp"), str(tmp_path / "absent.aacp")]
+    names.append(str(tmp_path / "fifo.aacp"))
     expected = [r"0 - ok", r"2 - cannot read .*folder\.aacp", r"2 - cannot open .*absent\.aacp"]
+    expected.append(r"2 - cannot read .*fifo\.aacp: it is a named pipe \(FIFO\)")
     if Path("/dev/zero").exists():
         (tmp_path / "zero.aacp").symlink_to("/dev/zero")
         names.append(str(tmp_path / "zero.aacp"))

@@ -450,6 +450,11 @@ def test_not_a_regular_file(tmp_dir: Path) -> None:
     (tmp_dir / "folder.aacp").mkdir(exist_ok=True)
     with pytest.raises(ValueError, match="not a regular file"):
         RuntimePolicy.load(tmp_dir / "folder.aacp")
+    fifo = tmp_dir / "fifo.aacp"
+    fifo.unlink(missing_ok=True)
+    os.mkfifo(fifo)  # opening it to read would wait for a writer
+    with pytest.raises(ValueError, match="not a regular file"):
+        RuntimePolicy.load(fifo)
     with pytest.raises(FileNotFoundError):
         RuntimePolicy.load(tmp_dir / "absent.aacp")
 
