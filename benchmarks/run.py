@@ -57,6 +57,7 @@ from benchmarks.presets import PRESETS, Cell, build_cells, select
 from benchmarks.provenance import (
     ENV_VAR,
     REPO,
+    RUN_LOG,
     DirtyTreeError,
     invocation_provenance,
     logged_invocation,
@@ -141,6 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     if not args.list:
         try:
             check_writable_dir(out, "--out")
+            cells.check_results_folder(out, (RUN_LOG,))
         except ValueError as error:
             parser.error(str(error))
     os.environ["SB3_AAC_BENCH_COMMAND"] = "python -m benchmarks.run " + " ".join(

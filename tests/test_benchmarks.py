@@ -594,6 +594,20 @@ def test_runner_refuses_an_unwritable_out(tmp_path, capsys):
     assert info.value.code == 2 and "cannot write --out" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("make", "named"), [("runs.jsonl", "'runs.jsonl' is not a regular file"), ("locks", "'locks' is not a folder")]
+)
+def test_runner_refuses_a_results_folder_whose_entries_are_in_the_way(tmp_path, capsys, make, named):
+    if make == "runs.jsonl":
+        (tmp_path / make).mkdir()
+    else:
+        (tmp_path / make).write_text("a file where the run keeps its lock files")
+    with pytest.raises(SystemExit) as info:
+        bench_run.main(["--preset", "quick", "--out", str(tmp_path), "--allow-dirty"])
+    assert info.value.code == 2 and named in capsys.readouterr().err
+    assert not (tmp_path / "cells").exists()
+
+
 def test_runner_gives_up_on_an_address_where_no_ray_cluster_listens(tmp_path, capsys):
     import socket
     import time

@@ -528,3 +528,17 @@ def test_a_policy_plays_on_its_own_perception_on_the_real_server() -> None:
     episodes = server_episodes(20, world_seed=1, seed=2)
     report = play_on_server(HandCodedDribbler("v19"), episodes, server=REAL_SERVER, perceive=True)
     assert report.mean_distance > 10  # it dribbles, if worse than on the exact state (docs/pitch.md)
+
+
+@pytest.mark.parametrize(
+    ("ports", "timeout", "message"),
+    [
+        ((70000, 6001), 1.0, r"ports.player must be a port number in 1 .. 65535, got 70000"),
+        ((6000, -1), 1.0, r"ports.trainer must be a port number in 1 .. 65535, got -1"),
+        (("abc", 6001), 1.0, r"ports.player must be a port number in 1 .. 65535, got 'abc'"),
+        ((6000, 6001), 1e12, r"timeout must be a number of seconds in \(0, 3600\], got 1000000000000\.0"),
+    ],
+)
+def test_bad_ports_and_timeouts_are_refused_before_any_socket(ports, timeout, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        connect("127.0.0.1", ServerPorts(*ports, 0), timeout=timeout)
