@@ -146,6 +146,28 @@ def test_each_extra_holds_what_its_command_imports() -> None:
             assert any(req.startswith(module) for req in extras[extra]), (extra, module)
 
 
+def test_train_says_when_the_budget_is_rounded_up_and_the_model_not_kept(capsys) -> None:
+    argv = ["train", "--env", "sb3_aac/ParameterizedTarget-v0", "--algo", "hppo", "--timesteps", "100", "--n-envs", "2",
+            "--set", "n_steps=16", "--set", "batch_size=16", "--eval-episodes", "2"]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "whole rollouts of n_steps x n_envs = 32 steps, so it trains 128 steps for the budget of 100" in out
+    assert "trained 128 steps" in out and "no --out: the model is evaluated and then not kept" in out
+
+
+def test_train_names_its_evaluation_seed_and_evaluate_repeats_it(tmp_path: Path, capsys) -> None:
+    argv = ["train", "--policy", "RbfPolicy", "--timesteps", "300", "--n-envs", "2", "--seed", "3", "--set", "n_rbf=4",
+            "--out", str(tmp_path), "--eval-episodes", "20"]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "note:" not in out  # a step budget SarsaAAC keeps, and --out given
+    assert "seed 10003 (never a training seed; sb3-aac evaluate MODEL --seed 10003 repeats it)" in out
+    assert main(["evaluate", str(tmp_path / "model.zip"), "--episodes", "20", "--seed", "10003"]) == 0
+    figures = [line for line in out.splitlines() if "distance" in line or "rate" in line]
+    evaluated = capsys.readouterr().out
+    assert figures and all(line in evaluated for line in figures)
+
+
 def test_export(trained: Path, tmp_path: Path, capsys) -> None:
     from sb3_aac import RuntimePolicy, SarsaAAC
 

@@ -193,3 +193,21 @@ def test_one_runtime_policy_shared_by_threads_decides_as_alone(tmp_path) -> None
     with ThreadPoolExecutor(4) as pool:
         shared = list(pool.map(runtime.act, obs))
     assert all(a[0] == b[0] and np.array_equal(a[1], b[1]) for a, b in zip(alone, shared, strict=True))
+
+
+@algos(ALGO_CLASSES)
+def test_set_random_seed_without_seed_repeats_a_run(case) -> None:
+    """SB3's set_random_seed before a constructor without seed= repeats the run, as for SB3's own algorithms (the
+    algorithms' own generators draw their seed from numpy's global state)."""
+    import torch as th
+    from stable_baselines3.common.utils import set_random_seed
+
+    runs = []
+    for _ in range(2):
+        set_random_seed(7)
+        env = ParameterizedTargetEnv()
+        env.reset(seed=7)  # the env's own generator, as make_vec_env(seed=...) seeds it
+        model = case.make(env)
+        model.learn(300)
+        runs.append(th.cat([p.detach().flatten() for p in model.policy.parameters()]))
+    assert th.equal(runs[0], runs[1])
