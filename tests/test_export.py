@@ -459,6 +459,14 @@ def test_not_a_regular_file(tmp_dir: Path) -> None:
         RuntimePolicy.load(tmp_dir / "absent.aacp")
 
 
+def test_export_into_a_folder_that_is_a_file_names_it(tmp_path: Path) -> None:
+    (tmp_path / "file").write_text("not a folder")
+    model = randomised_model("RbfPolicy", "nested")
+    for target in (tmp_path / "file" / "policy.aacp", tmp_path / "file" / "sub" / "policy.aacp"):
+        with pytest.raises(NotADirectoryError, match="its folder, or one above it, is a file, not a folder"):
+            export_policy(model, target)
+
+
 def test_load_accepts_the_name_export_was_given(tmp_dir: Path, monkeypatch) -> None:
     model = randomised_model("RbfPolicy", "flat", n_rbf=3)
     monkeypatch.chdir(tmp_dir)

@@ -257,4 +257,4 @@ def evaluate_greedy(model: Any, args: argparse.Namespace) -> None:
 
         eval_env = make_train_env(args.env, 1, seed)
         mean, std = evaluate_policy(model, eval_env, n_eval_episodes=args.eval_episodes, deterministic=True)
-        print(f"greedy evaluation over {args.eval_episodes} episodes (seed {seed}): return {mean:.3f} +/- {std:.3f}")
+        print(f"greedy evaluation over {args.eval_episodes} episodes: return {mean:.3f} +/- {std:.3f} (seed {seed})")
