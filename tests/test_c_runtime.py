@@ -542,6 +542,17 @@ def test_refuses_what_the_python_reader_refuses(source: str, good_files, drivers
     assert refused >= len(cases) // 2
 
 
+def test_an_unusable_observation_is_named_for_what_it_is(policy_files, drivers, tmp_path: Path) -> None:
+    """NaN is "NaN or inf"; a finite value whose square overflows (1e300) is "too large", as RuntimePolicy says."""
+    path, obs = policy_files["RbfPolicy-nested"]
+    for value, message in ((np.nan, "holds NaN or inf values"), (1e300, "holds values too large to compute with")):
+        np.full((1, obs.reshape(len(obs), -1).shape[1]), value).tofile(tmp_path / "obs.bin")
+        for driver in builds(drivers):
+            argv = [str(driver), "act", str(path), str(tmp_path / "obs.bin"), str(tmp_path / "out.bin")]
+            result = subprocess.run(argv, capture_output=True, check=False, timeout=300, env={**os.environ, **SANITIZER_ENV})
+            assert result.returncode != 0 and f"observation 0: the observation {message}" in result.stderr.decode()
+
+
 def test_files_by_name(policy_files, drivers, tmp_path: Path) -> None:
     """aacp_load_file takes the name export_policy was given (".aacp" appended), and refuses a directory, a missing
     file, a link to an endless device (after reading its first bytes) and a named pipe (without waiting for a writer)."""

@@ -83,7 +83,7 @@ enum aacp_code {
     AACP_ERR_ARRAY = 9,       /* an array is missing, misshapen or misplaced */
     AACP_ERR_VALUE = 10,      /* an array holds NaN/inf or values out of their range */
     AACP_ERR_MEMORY = 11,     /* out of memory */
-    AACP_ERR_OBSERVATION = 12 /* the observation holds NaN or inf values */
+    AACP_ERR_OBSERVATION = 12 /* the observation holds NaN or inf values, or values whose squares overflow */
 };
 
 typedef struct aacp_error {
@@ -1956,8 +1956,13 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
     int tiles = p->features == AACP__TILES, networks = p->head == AACP__NETWORKS, pdqn = p->head == AACP__PDQN;
     for (i = 0; i < p->d; i++)
         total += x[i] * x[i];
-    if (!isfinite(total)) /* one reduction, as RuntimePolicy: NaN, inf (and absurd magnitudes) reach the sum */
-        return aacp__set(error, AACP_ERR_OBSERVATION, "the observation holds NaN or inf values");
+    if (!isfinite(total)) { /* one reduction, as RuntimePolicy: NaN, inf (and absurd magnitudes) reach the sum */
+        for (i = 0; i < p->d; i++)
+            if (!isfinite(x[i]))
+                return aacp__set(error, AACP_ERR_OBSERVATION, "the observation holds NaN or inf values");
+        return aacp__set(error, AACP_ERR_OBSERVATION,
+                         "the observation holds values too large to compute with (their squares overflow double)");
+    }
     if (tiles) {
         for (i = 0; i < p->c; i++) {
             int64_t feature = p->tile_bases[i];
