@@ -1,6 +1,7 @@
 """
 What every algorithm of this package guards beyond Stable-Baselines3: ``learn``'s budget is checked, ``save`` cannot
-lose the earlier file, and the env's observations and rewards are checked finite before anything learns from them.
+lose the earlier file, ``load`` checks the file first, a learning rate must be a number or a schedule, an env must
+have Box observations, and the env's observations and rewards are checked finite before anything learns from them.
 """
 
 from __future__ import annotations
