@@ -7,10 +7,14 @@ TORCH ?= torch==2.13.0
 .PHONY: install demo test lint bench docs
 install: $(VENV)/.installed
 
-$(VENV)/.installed: pyproject.toml
+# The venv with torch alone; each target below adds the package with the extras it needs.
+$(VENV)/.torch-installed:
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q "$(TORCH)"
+	touch $@
+
+$(VENV)/.installed: pyproject.toml $(VENV)/.torch-installed
 	$(PY) -m pip install -q -e ".[dev]"
 	touch $@
 
@@ -33,10 +37,13 @@ lint: install
 bench: install
 	$(PY) -m robocup_dribble.speed
 
-# The documentation site, built into site/ with warnings as errors (as CI does); open site/index.html.
+# The documentation site, built into site/ with warnings as errors (as CI does). It needs the package and the docs
+# extra only (not the dev extra). View it served, where its search works (a browser blocks the search of a page
+# opened from disk): python -m http.server -d site 8000, then http://localhost:8000
 docs: $(VENV)/.docs-installed
 	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict
+	@echo "view it: $(PY) -m http.server -d site 8000, then open http://localhost:8000 (search works when served)"
 
-$(VENV)/.docs-installed: $(VENV)/.installed
+$(VENV)/.docs-installed: pyproject.toml $(VENV)/.torch-installed
 	$(PY) -m pip install -q -e ".[docs]"
 	touch $@

@@ -150,6 +150,22 @@ def save_model_atomic(model: Any, path: Path) -> None:
         model.save(tmp)
 
 
+RESULT_FOLDERS = ("cells", "models", "errors", "locks", "tb")
+"""The folders a run writes into its results directory (each created when first needed)."""
+
+
+def check_results_folder(out: Path, files: tuple[str, ...]) -> None:
+    """Check, before any work, that what a run writes into ``out`` is not in the way: :data:`RESULT_FOLDERS` are
+    folders and ``files`` (``runs.jsonl``) regular files where they exist.
+
+    :raises ValueError: naming each entry of the wrong kind
+    """
+    wrong = [f"{name!r} is not a folder" for name in RESULT_FOLDERS if (out / name).exists() and not (out / name).is_dir()]
+    wrong += [f"{name!r} is not a regular file" for name in files if (out / name).exists() and not (out / name).is_file()]
+    if wrong:
+        raise ValueError(f"the results folder {str(out)!r} cannot take this run: {'; '.join(wrong)} (move it away)")
+
+
 def remove_stale_temporaries(out: Path) -> None:
     """Temporary files a killed process left behind; a live process's temporaries (a concurrent run) stay."""
     for sub in ("cells", "models", "errors"):

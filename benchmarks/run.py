@@ -57,6 +57,7 @@ from benchmarks.presets import PRESETS, Cell, build_cells, select
 from benchmarks.provenance import (
     ENV_VAR,
     REPO,
+    RUN_LOG,
     DirtyTreeError,
     invocation_provenance,
     logged_invocation,
@@ -84,13 +85,24 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _patterns(text: str) -> str:
+    """An argparse type: comma-separated cell-id patterns, at least one (an empty --only, e.g. an unset shell
+    variable, would otherwise select every cell)."""
+    if not any(p.strip() for p in text.split(",")):
+        raise argparse.ArgumentTypeError(f"expected at least one pattern (e.g. sarsa_aac or 'hppo-*'), got {text!r}")
+    return text
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.run", description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", choices=sorted(PRESETS), help="the grid to run")
     parser.add_argument("--out", default=None, help="results directory (default: runs/bench-<preset>)")
     parser.add_argument("--workers", type=_positive_int, default=2, help="worker processes (1: run in this process)")
     parser.add_argument(
-        "--only", default=None, help="comma-separated glob patterns of cell ids (a plain word matches as a substring)"
+        "--only",
+        type=_patterns,
+        default=None,
+        help="comma-separated glob patterns of cell ids (a plain word matches as a substring)",
     )
     parser.add_argument("--list", action="store_true", help="list the cells (and whether they are finished), run nothing")
     parser.add_argument(
@@ -130,6 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     if not args.list:
         try:
             check_writable_dir(out, "--out")
+            cells.check_results_folder(out, (RUN_LOG,))
         except ValueError as error:
             parser.error(str(error))
     os.environ["SB3_AAC_BENCH_COMMAND"] = "python -m benchmarks.run " + " ".join(

@@ -83,11 +83,21 @@ def sample_kwargs(trial: optuna.Trial | optuna.trial.FixedTrial, env_id: str, al
 
 
 def read_tuned(env_id: str, algo: str, config: str) -> dict[str, Any]:
-    """The tuned file of a learner. :raises FileNotFoundError: saying how to make it"""
+    """The tuned file of a learner.
+
+    :raises FileNotFoundError: saying how to make it
+    :raises ValueError: naming the file, if it is not YAML (a syntax error, a python tag, NUL bytes) or has no params
+    """
     path = tuned_path(env_id, algo, config)
     if not path.is_file():
         raise FileNotFoundError(f"{path} (run the tuning stage: python -m benchmarks.run --tune --preset ...)")
-    data = yaml.safe_load(path.read_text())
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (yaml.YAMLError, UnicodeDecodeError) as error:  # a syntax error, a python tag, NUL bytes, not UTF-8
+        first = " ".join(str(error).split())[:200]
+        raise ValueError(
+            f"{path} is not a tuned-settings YAML file ({type(error).__name__}: {first}); fix it or run the tuning stage again"
+        ) from None
     if not (isinstance(data, dict) and isinstance(data.get("params"), dict)):
         raise ValueError(f"{path} is damaged (no 'params' mapping); run the tuning stage again")
     return data

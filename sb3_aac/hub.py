@@ -37,56 +37,82 @@ class Evaluation:
     units: dict[str, str] = field(default_factory=dict)
 
 
-def model_card(algorithm: str, policy: str, evaluation: Evaluation, has_policy_file: bool, repo_id: str) -> str:
-    """The model card: YAML metadata the Hub indexes, then what the model is, its figures and how to load it."""
-    from huggingface_hub import ModelCard, ModelCardData
-    from huggingface_hub.repocard_data import EvalResult
+def card_metadata(algorithm: str, policy: str, evaluation: Evaluation) -> str:
+    """The card's YAML metadata, as the Hub indexes it (``library_name``, ``tags``, a ``model-index`` with the
+    evaluation); written here, so that a card needs no ``huggingface_hub``. Strings are JSON-quoted (valid YAML)."""
+    q = json.dumps
+    tags = ["reinforcement-learning", "stable-baselines3", LIBRARY, "parameterized-actions", evaluation.env_id, algorithm]
+    metrics = "".join(
+        f"    - type: {q(name)}\n      value: {round(float(value), 4)!r}\n      name: {q(name)}\n"
+        for name, value in evaluation.metrics.items()
+    )
+    return (
+        f"library_name: {q(LIBRARY)}\ntags:\n"
+        + "".join(f"- {q(tag)}\n" for tag in tags)
+        + f"model-index:\n- name: {q(f'{algorithm}-{policy}-{evaluation.env_id}')}\n  results:\n"
+        + f"  - task:\n      type: reinforcement-learning\n    dataset:\n      name: {q(evaluation.env_id)}\n"
+        + f"      type: {q(evaluation.env_id)}\n    metrics:\n{metrics}"
+    )
 
+
+def env_import(env_id: str) -> str:
+    """The line that registers ``env_id``: an import of its entry point's top package (a comment if not registered)."""
+    import gymnasium as gym
+
+    spec = gym.registry.get(env_id)
+    if spec is None:
+        return f"# import the package that registers {env_id}"
+    module = spec.entry_point if isinstance(spec.entry_point, str) else spec.entry_point.__module__
+    return f"import {module.split(':')[0].split('.')[0]}  # registers {env_id}"
+
+
+def model_card(algorithm: str, policy: str, evaluation: Evaluation, has_policy_file: bool, repo_id: str) -> str:
+    """The model card: YAML metadata the Hub indexes, then what the model is, its figures, how to install sb3-aac (it
+    is not on PyPI: its wheel) and a snippet that loads the model, makes its env and decides."""
     from sb3_aac import __version__
 
-    results = [
-        EvalResult(
-            task_type="reinforcement-learning",
-            dataset_type=evaluation.env_id,
-            dataset_name=evaluation.env_id,
-            metric_type=name,
-            metric_name=name,
-            metric_value=round(float(value), 4),
-        )
-        for name, value in evaluation.metrics.items()
-    ]
-    data = ModelCardData(
-        library_name=LIBRARY,
-        tags=["reinforcement-learning", "stable-baselines3", LIBRARY, "parameterized-actions", evaluation.env_id, algorithm],
-        model_name=f"{algorithm}-{policy}-{evaluation.env_id}",
-        eval_results=results,
-    )
     figures = "\n".join(
         f"| {name} | {value:.4g}{' ' + evaluation.units[name] if name in evaluation.units else ''} |"
         for name, value in evaluation.metrics.items()
     )
-    runtime = (
-        f"""
-Or decide with numpy alone (no torch; e.g. inside a RoboCup agent) from the exported policy:
 
-```python
+    def snippet(loader: str, load: str, decide: str) -> str:
+        return f"""```python
+import gymnasium as gym
+{env_import(evaluation.env_id)}
 from huggingface_hub import hf_hub_download
-from sb3_aac.runtime import RuntimePolicy
+{loader}
 
-policy = RuntimePolicy.load(hf_hub_download("{repo_id}", "{POLICY}"))
-action_type, params = policy.act(obs)
-```
-"""
+{load}
+env = gym.make("{evaluation.env_id}")
+obs, info = env.reset(seed=0)
+{decide}
+```"""
+
+    model_snippet = snippet(
+        f"from sb3_aac import {algorithm}",
+        f'model = {algorithm}.load(hf_hub_download("{repo_id}", "{MODEL}"))',
+        "action, _ = model.predict(obs, deterministic=True)\nobs, reward, terminated, truncated, info = env.step(action)",
+    )
+    runtime_snippet = snippet(
+        "from sb3_aac.runtime import RuntimePolicy",
+        f'policy = RuntimePolicy.load(hf_hub_download("{repo_id}", "{POLICY}"))',
+        "action_type, params = policy.act(obs)",
+    )
+    runtime = (
+        "\nOr decide with numpy alone (no torch; e.g. inside a RoboCup agent) from the exported policy:\n\n"
+        f"{runtime_snippet}\n"
         if has_policy_file
         else ""
     )
     policy_line = f" `{POLICY}`: the exported policy (plain JSON and float64 arrays);" if has_policy_file else ""
+    wheel = f"sb3_aac-{__version__}-py3-none-any.whl"
     body = f"""
 # {algorithm} ({policy}) on {evaluation.env_id}
 
 A parameterized-action agent (pick one of K action types, then a real-valued parameter vector for it) trained with
-**{algorithm}** and the `{policy}` policy of sb3-aac {__version__} (`pip install sb3-aac`), the Stable-Baselines3 home
-for hybrid-action reinforcement learning, on `{evaluation.env_id}`.
+**{algorithm}** and the `{policy}` policy of sb3-aac {__version__}, the Stable-Baselines3 home for hybrid-action
+reinforcement learning, on `{evaluation.env_id}`.
 
 ## Evaluation
 
@@ -98,17 +124,14 @@ for hybrid-action reinforcement learning, on `{evaluation.env_id}`.
 
 ## Usage
 
+sb3-aac is not on PyPI: install its wheel (`python -m build --wheel` in a clone of the sb3-aac repository writes
+`dist/{wheel}`), or `pip install "./sb3-aac[hub]"` from beside the clone:
+
 ```bash
-pip install sb3-aac huggingface_hub
+pip install "./dist/{wheel}[hub]"
 ```
 
-```python
-from huggingface_hub import hf_hub_download
-from sb3_aac import {algorithm}
-
-model = {algorithm}.load(hf_hub_download("{repo_id}", "{MODEL}"))
-action, _ = model.predict(obs, deterministic=True)
-```
+{model_snippet}
 
 A `model.zip` holds pickled entries that SB3's `load` runs: load it only from people you trust. `sb3-aac evaluate` and
 `sb3-aac export` load it without unpickling anything.
@@ -118,7 +141,7 @@ A `model.zip` holds pickled entries that SB3's `load` runs: load it only from pe
 - `{MODEL}`: the model (`{algorithm}.load`);{policy_line}
   `{RESULTS}`: the evaluation above.
 """
-    return str(ModelCard.from_template(data, template_str="---\n{{ card_data }}\n---\n" + body))
+    return f"---\n{card_metadata(algorithm, policy, evaluation)}---\n{body}"
 
 
 def hub_folder(

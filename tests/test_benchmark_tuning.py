@@ -8,6 +8,7 @@ import json
 import multiprocessing
 import os
 import pwd
+import re
 import shutil
 import signal
 import socket
@@ -321,6 +322,26 @@ def test_a_tuned_cell_builds_its_learner_with_the_best_trials_settings(tmp_path,
     recorded = algo_config(cell)
     assert recorded["tuned_params"] == trial.params and recorded["tuning"]["best"]["value"] == 0.5
     json.dumps(recorded)
+
+
+@pytest.mark.parametrize(
+    ("content", "error"),
+    [
+        (b"params: {gamma: [0.9\n", "ParserError"),
+        (b"params: !!python/object/apply:os.system ['true']\n", "ConstructorError"),
+        (b"params:\x00 {}\n", "ReaderError"),
+    ],
+    ids=["syntax-error", "python-tag", "nul-bytes"],
+)
+def test_a_tuned_file_that_is_not_yaml_is_named_before_any_cell_runs(tmp_path, monkeypatch, content, error):
+    from benchmarks.tuned import tuned_path
+
+    path = tuned_path("Platform-v0", "MPDQN", "mpdqn", tmp_path)
+    path.parent.mkdir(parents=True)
+    path.write_bytes(content)
+    monkeypatch.setenv(TUNED_DIR_VAR, str(tmp_path))
+    with pytest.raises(ValueError, match=f"{re.escape(str(path))} is not a tuned-settings YAML file \\({error}"):
+        resolve_tuned([Cell("Platform-v0", "MPDQN", "mpdqn-tuned", 0, 1000)])
 
 
 # ---------------------------------------------------------------------------------------------------------------------

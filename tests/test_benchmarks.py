@@ -573,6 +573,8 @@ def test_a_cell_file_with_a_wrong_typed_field_is_damaged(tmp_path, field, value)
     ("argv", "message"),
     [
         (["--only", "no-such-cell"], "matches none of the"),
+        (["--only", ""], "expected at least one pattern"),
+        (["--only", " , "], "expected at least one pattern"),
         (["--workers", "-3"], "must be >= 1"),
         (["--workers", "two"], "expected a whole number"),
         (["--players", "0"], "must be >= 1"),
@@ -590,6 +592,20 @@ def test_runner_refuses_an_unwritable_out(tmp_path, capsys):
     with pytest.raises(SystemExit) as info:
         bench_run.main(["--preset", "quick", "--out", str(tmp_path / "file" / "out")])
     assert info.value.code == 2 and "cannot write --out" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("make", "named"), [("runs.jsonl", "'runs.jsonl' is not a regular file"), ("locks", "'locks' is not a folder")]
+)
+def test_runner_refuses_a_results_folder_whose_entries_are_in_the_way(tmp_path, capsys, make, named):
+    if make == "runs.jsonl":
+        (tmp_path / make).mkdir()
+    else:
+        (tmp_path / make).write_text("a file where the run keeps its lock files")
+    with pytest.raises(SystemExit) as info:
+        bench_run.main(["--preset", "quick", "--out", str(tmp_path), "--allow-dirty"])
+    assert info.value.code == 2 and named in capsys.readouterr().err
+    assert not (tmp_path / "cells").exists()
 
 
 def test_runner_gives_up_on_an_address_where_no_ray_cluster_listens(tmp_path, capsys):

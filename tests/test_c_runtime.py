@@ -71,7 +71,9 @@ def drivers(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path | str]:
 
 def run(driver: Path, *args: str) -> str:
     """The driver's stdout; it must exit 0 with nothing on stderr (no sanitizer report)."""
-    result = subprocess.run([str(driver), *args], capture_output=True, check=False, env={**os.environ, **SANITIZER_ENV})
+    result = subprocess.run(
+        [str(driver), *args], capture_output=True, check=False, timeout=300, env={**os.environ, **SANITIZER_ENV}
+    )
     stderr = result.stderr.decode(errors="replace")
     assert result.returncode == 0 and not stderr, f"{driver.name} {args[:2]}: exit {result.returncode}\n{stderr[-3000:]}"
     return result.stdout.decode(errors="replace")
@@ -540,13 +542,27 @@ def test_refuses_what_the_python_reader_refuses(source: str, good_files, drivers
     assert refused >= len(cases) // 2
 
 
+def test_an_unusable_observation_is_named_for_what_it_is(policy_files, drivers, tmp_path: Path) -> None:
+    """NaN is "NaN or inf"; a finite value whose square overflows (1e300) is "too large", as RuntimePolicy says."""
+    path, obs = policy_files["RbfPolicy-nested"]
+    for value, message in ((np.nan, "holds NaN or inf values"), (1e300, "holds values too large to compute with")):
+        np.full((1, obs.reshape(len(obs), -1).shape[1]), value).tofile(tmp_path / "obs.bin")
+        for driver in builds(drivers):
+            argv = [str(driver), "act", str(path), str(tmp_path / "obs.bin"), str(tmp_path / "out.bin")]
+            result = subprocess.run(argv, capture_output=True, check=False, timeout=300, env={**os.environ, **SANITIZER_ENV})
+            assert result.returncode != 0 and f"observation 0: the observation {message}" in result.stderr.decode()
+
+
 def test_files_by_name(policy_files, drivers, tmp_path: Path) -> None:
     """aacp_load_file takes the name export_policy was given (".aacp" appended), and refuses a directory, a missing
-    file and a link to an endless device (after reading its first bytes)."""
+    file, a link to an endless device (after reading its first bytes) and a named pipe (without waiting for a writer)."""
     path, _ = policy_files["RbfPolicy-nested"]
     (tmp_path / "folder.aacp").mkdir()
+    os.mkfifo(tmp_path / "fifo.aacp")
     names = [str(path)[: -len(".aacp")], str(tmp_path / "folder.aacp"), str(tmp_path / "absent.aacp")]
+    names.append(str(tmp_path / "fifo.aacp"))
     expected = [r"0 - ok", r"2 - cannot read .*folder\.aacp", r"2 - cannot open .*absent\.aacp"]
+    expected.append(r"2 - cannot read .*fifo\.aacp: it is a named pipe \(FIFO\)")
     if Path("/dev/zero").exists():
         (tmp_path / "zero.aacp").symlink_to("/dev/zero")
         names.append(str(tmp_path / "zero.aacp"))

@@ -112,6 +112,62 @@ def test_render_gif(trained: Path, tmp_path: Path, capsys) -> None:
     assert len(frames) == steps + 1 and frames[0].ndim == 3
 
 
+@pytest.mark.parametrize(
+    ("argv", "module", "extra"),
+    [
+        (["reliability", "MODEL", "--players", "20", "--out", "OUT/rel.png"], "matplotlib", "plots"),
+        (["render", "MODEL", "--out", "OUT/e.gif"], "imageio", "render"),
+        (["render", "MODEL", "--window"], "pygame", "render"),
+        (["push", "MODEL", "--repo-id", "me/x", "--episodes", "3"], "huggingface_hub", "hub"),
+        (["train", "--timesteps", "100", "--progress-bar", "--out", "OUT/run"], "tqdm", "progress"),
+        (["train", "--timesteps", "100", "--progress-bar"], "rich", "progress"),
+    ],
+)
+def test_a_missing_optional_package_is_named_before_any_work(
+    trained: Path, tmp_path: Path, monkeypatch, capsys, argv, module, extra
+) -> None:
+    """Each command checks the optional packages it needs first: one line naming the extra that holds them, exit 2,
+    nothing printed or written."""
+    monkeypatch.setitem(sys.modules, module, None)  # makes `import module` fail
+    argv = [str(trained / "model.zip") if a == "MODEL" else a.replace("OUT", str(tmp_path)) for a in argv]
+    err = run_error(capsys, argv)
+    assert f"needs {module}" in err and f"pip install 'sb3-aac[{extra}]'" in err and len(err.splitlines()) == 1
+    assert capsys.readouterr().out == "" and list(tmp_path.iterdir()) == []
+
+
+def test_each_extra_holds_what_its_command_imports() -> None:
+    tomllib = pytest.importorskip("tomllib")  # Python 3.11+
+    extras = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    for extra, modules in {
+        "plots": ["matplotlib"], "render": ["pygame", "imageio"], "hub": ["huggingface_hub"], "progress": ["tqdm", "rich"],
+        "tune": ["optuna"],
+    }.items():  # fmt: skip
+        for module in modules:
+            assert any(req.startswith(module) for req in extras[extra]), (extra, module)
+
+
+def test_train_says_when_the_budget_is_rounded_up_and_the_model_not_kept(capsys) -> None:
+    argv = ["train", "--env", "sb3_aac/ParameterizedTarget-v0", "--algo", "hppo", "--timesteps", "100", "--n-envs", "2",
+            "--set", "n_steps=16", "--set", "batch_size=16", "--eval-episodes", "2"]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "whole rollouts of n_steps x n_envs = 32 steps, so it trains 128 steps for the budget of 100" in out
+    assert "trained 128 steps" in out and "no --out: the model is evaluated and then not kept" in out
+
+
+def test_train_names_its_evaluation_seed_and_evaluate_repeats_it(tmp_path: Path, capsys) -> None:
+    argv = ["train", "--policy", "RbfPolicy", "--timesteps", "300", "--n-envs", "2", "--seed", "3", "--set", "n_rbf=4",
+            "--out", str(tmp_path), "--eval-episodes", "20"]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "note:" not in out  # a step budget SarsaAAC keeps, and --out given
+    assert "seed 10003 (never a training seed; sb3-aac evaluate MODEL --seed 10003 repeats it)" in out
+    assert main(["evaluate", str(tmp_path / "model.zip"), "--episodes", "20", "--seed", "10003"]) == 0
+    figures = [line for line in out.splitlines() if "distance" in line or "rate" in line]
+    evaluated = capsys.readouterr().out
+    assert figures and all(line in evaluated for line in figures)
+
+
 def test_export(trained: Path, tmp_path: Path, capsys) -> None:
     from sb3_aac import RuntimePolicy, SarsaAAC
 

@@ -450,8 +450,21 @@ def test_not_a_regular_file(tmp_dir: Path) -> None:
     (tmp_dir / "folder.aacp").mkdir(exist_ok=True)
     with pytest.raises(ValueError, match="not a regular file"):
         RuntimePolicy.load(tmp_dir / "folder.aacp")
+    fifo = tmp_dir / "fifo.aacp"
+    fifo.unlink(missing_ok=True)
+    os.mkfifo(fifo)  # opening it to read would wait for a writer
+    with pytest.raises(ValueError, match="not a regular file"):
+        RuntimePolicy.load(fifo)
     with pytest.raises(FileNotFoundError):
         RuntimePolicy.load(tmp_dir / "absent.aacp")
+
+
+def test_export_into_a_folder_that_is_a_file_names_it(tmp_path: Path) -> None:
+    (tmp_path / "file").write_text("not a folder")
+    model = randomised_model("RbfPolicy", "nested")
+    for target in (tmp_path / "file" / "policy.aacp", tmp_path / "file" / "sub" / "policy.aacp"):
+        with pytest.raises(NotADirectoryError, match="its folder, or one above it, is a file, not a folder"):
+            export_policy(model, target)
 
 
 def test_load_accepts_the_name_export_was_given(tmp_dir: Path, monkeypatch) -> None:

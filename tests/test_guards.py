@@ -110,6 +110,14 @@ def test_a_model_loads_to_act_as_rl_zoo3_enjoy_loads_it(case, tmp_path) -> None:
         ("SarsaAAC", "MlpPolicy", dict(policy_kwargs=dict(hidden_units=100_000_000)), r"approximators .* would take .* GiB"),
         ("SarsaAAC", "MlpPolicy", dict(policy_kwargs=dict(hidden_units=1e8)), "hidden_units must be a whole number"),
         ("SarsaAAC", "RbfPolicy", dict(policy_kwargs=dict(n_rbf=2.5)), "n_rbf must be a whole number"),
+        (
+            "SarsaAAC",
+            "TilePolicy",
+            dict(policy_kwargs=dict(tiles_per_input=100_000)),
+            r"tiles_per_input=100000, .* would take",
+        ),
+        ("SarsaAAC", "TilePolicy", dict(policy_kwargs=dict(n_tilings=100_000_000)), r"n_tilings=100000000: .* would take"),
+        ("HybridPPO", "MlpPolicy", dict(n_steps=2**28), r"rollout buffer \(n_steps=268,435,456 x 1 envs\) would take"),
         ("MPDQN", "MlpPolicy", dict(buffer_size=10**10), r"replay buffer \(buffer_size=10,000,000,000\) would take"),
         ("MPDQN", "MlpPolicy", dict(buffer_size=1e6), "buffer_size must be an integer >= 1"),
         ("PDQN", "MlpPolicy", dict(policy_kwargs=dict(net_arch=[-5])), r"net_arch must hold whole numbers in 1 .. 65,536"),
@@ -138,6 +146,40 @@ def test_an_empty_batch_is_one_clear_error_everywhere(case, tmp_path) -> None:
             call(empty)
 
 
+@algos(ALGO_CLASSES)
+def test_an_observation_no_policy_can_take_is_named_for_what_it_is(case, tmp_path) -> None:
+    """Complex numbers, finite values beyond float32 (not "NaN or inf"), and a Dict space (no MultiInputPolicy here)."""
+    from sb3_aac import RuntimePolicy, export_policy
+
+    model = case.make(ParameterizedTargetEnv(), seed=0)
+    obs = model.observation_space.sample()
+    with pytest.raises(ValueError, match="holds complex numbers: observations are real"):
+        model.predict(obs + 1j, deterministic=True)
+    with pytest.raises(ValueError, match=r"values beyond float32's range \(\|x\| > 3.4e\+38\)"):
+        model.predict(np.full(obs.shape, 1e300), deterministic=True)
+    runtime = RuntimePolicy.load(export_policy(model, tmp_path / "policy.aacp"))
+    with pytest.raises(ValueError, match="too large to compute with"):
+        runtime.act(np.full(obs.shape, 1e300))
+    env = ParameterizedTargetEnv()
+    env.observation_space = spaces.Dict({"position": env.observation_space})
+    with pytest.raises(ValueError, match=r"sb3-aac's policies take a Box observation .*FlattenObservation") as error:
+        case.make(env)
+    assert "MultiInputPolicy" not in str(error.value)
+
+
+def test_one_hybrid_ppo_shared_by_threads_decides_as_alone() -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    from sb3_aac import HybridPPO
+
+    model = HybridPPO("MlpPolicy", ParameterizedTargetEnv(), seed=0)
+    obs = np.stack([model.observation_space.sample() for _ in range(400)])
+    alone = [model.predict(o, deterministic=True)[0] for o in obs]
+    with ThreadPoolExecutor(4) as pool:
+        shared = list(pool.map(lambda o: model.predict(o, deterministic=True)[0], obs))
+    assert all(a[0] == b[0] and np.array_equal(a[1][a[0]], b[1][b[0]]) for a, b in zip(alone, shared, strict=True))
+
+
 def test_one_runtime_policy_shared_by_threads_decides_as_alone(tmp_path) -> None:
     from concurrent.futures import ThreadPoolExecutor
 
@@ -151,3 +193,21 @@ def test_one_runtime_policy_shared_by_threads_decides_as_alone(tmp_path) -> None
     with ThreadPoolExecutor(4) as pool:
         shared = list(pool.map(runtime.act, obs))
     assert all(a[0] == b[0] and np.array_equal(a[1], b[1]) for a, b in zip(alone, shared, strict=True))
+
+
+@algos(ALGO_CLASSES)
+def test_set_random_seed_without_seed_repeats_a_run(case) -> None:
+    """SB3's set_random_seed before a constructor without seed= repeats the run, as for SB3's own algorithms (the
+    algorithms' own generators draw their seed from numpy's global state)."""
+    import torch as th
+    from stable_baselines3.common.utils import set_random_seed
+
+    runs = []
+    for _ in range(2):
+        set_random_seed(7)
+        env = ParameterizedTargetEnv()
+        env.reset(seed=7)  # the env's own generator, as make_vec_env(seed=...) seeds it
+        model = case.make(env)
+        model.learn(300)
+        runs.append(th.cat([p.detach().flatten() for p in model.policy.parameters()]))
+    assert th.equal(runs[0], runs[1])

@@ -38,6 +38,8 @@ def test_unsupported_action_spaces(action_space, match):
         (dict(clip_range=0.0), "clip_range must be > 0"),
         (dict(clip_range_params=-0.2), "clip_range_params must be > 0"),
         (dict(clip_range_vf=0.0), "clip_range_vf must be > 0"),
+        (dict(clip_range="abc"), r"clip_range must be a finite number or a schedule .* got 'abc'"),
+        (dict(policy_kwargs=dict(log_std_init=float("nan"))), "log_std_init must be a finite number"),
         (dict(ent_coef=float("nan")), "ent_coef must be a finite number"),
         (dict(max_grad_norm=0.0), "max_grad_norm must be > 0"),
         (dict(target_kl=0.0), "target_kl must be > 0"),

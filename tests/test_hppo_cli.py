@@ -36,3 +36,12 @@ def test_tune_algo(tmp_path: Path, capsys) -> None:
     out = capsys.readouterr().out
     assert "tuning HybridPPO MlpPolicy" in out and "add to hyperparams/hppo.yml" in out
     assert "sb3-aac train --env sb3_aac/ParameterizedTarget-v0 --algo hppo --policy MlpPolicy" in out
+
+
+def test_train_at_the_lane_limit_is_refused_before_it_runs_out_of_memory(tmp_path: Path, capsys) -> None:
+    """On the dribbling env (one vectorised env for all lanes), the default."""
+    from tests.test_cli import run_error
+
+    err = run_error(capsys, ["train", "--algo", "hppo", "--n-envs", "65536", "--out", str(tmp_path / "run")])
+    assert "rollout buffer (n_steps=2,048 x 65,536 envs) would take" in err and "choose smaller sizes" in err
+    assert not (tmp_path / "run" / "model.zip").exists()

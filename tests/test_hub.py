@@ -4,6 +4,8 @@ what would be uploaded."""
 from __future__ import annotations
 
 import json
+import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -99,6 +101,29 @@ def test_dry_run_writes_the_folder_and_uploads_nothing(models, hub, tmp_path, ca
     assert "already holds" in run_error(capsys, argv)
 
 
+def test_a_dry_run_needs_no_hub_client_and_its_card_runs_as_written(models, tmp_path, monkeypatch, capsys) -> None:
+    """Without huggingface_hub, --dry-run writes the whole folder; the card's install command names the wheel sb3-aac
+    really comes from, and its snippets, with hf_hub_download reading that folder, make the env and decide."""
+    import types
+
+    folder = tmp_path / "hub"
+    monkeypatch.setitem(sys.modules, "huggingface_hub", None)  # makes `import huggingface_hub` fail
+    argv = ["push", str(models["tile"]), "--repo-id", "me/x", "--episodes", "3", "--folder", str(folder), "--dry-run"]
+    assert main(argv) == 0
+    assert sorted(p.name for p in folder.iterdir()) == ["README.md", "model.zip", "policy.aacp", "results.json"]
+    card = (folder / "README.md").read_text()
+    assert "pip install sb3-aac" not in card and 'pip install "./dist/sb3_aac-' in card
+    stand_in = types.ModuleType("huggingface_hub")
+    stand_in.hf_hub_download = lambda repo_id, name: str(folder / name)  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "huggingface_hub", stand_in)
+    snippets = re.findall(r"```python\n(.*?)```", card, re.DOTALL)
+    assert len(snippets) == 2
+    for snippet in snippets:
+        names: dict = {}
+        exec(snippet, names)
+        assert "obs" in names and ("action" in names or "action_type" in names)
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
@@ -120,3 +145,18 @@ def test_an_upload_failure_is_one_line(models, monkeypatch, capsys) -> None:
     assert "cannot upload to me/x: ConnectionError: no network" in run_error(
         capsys, ["push", str(models["tile"]), "--repo-id", "me/x", "--episodes", "3"]
     )
+
+
+def test_an_endpoint_that_never_answers_times_out(models, monkeypatch, capsys) -> None:
+    import socket
+
+    from huggingface_hub import constants
+
+    with socket.socket() as server:  # accepts connections (the kernel's backlog) and never answers
+        server.bind(("127.0.0.1", 0))
+        server.listen(4)
+        monkeypatch.setattr(constants, "ENDPOINT", f"http://127.0.0.1:{server.getsockname()[1]}")
+        monkeypatch.setattr(push, "HUB_TIMEOUT_S", 0.5)
+        monkeypatch.setenv("HF_TOKEN", "hf_stand_in")
+        err = run_error(capsys, ["push", str(models["tile"]), "--repo-id", "me/x", "--episodes", "3"])
+    assert "cannot upload to me/x" in err and "Timeout" in err

@@ -96,6 +96,30 @@ def test_same_seed_same_trajectory_other_seed_differs(env_id):
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
+def test_step_after_the_episode_ended_is_refused_until_reset(env_id):
+    env = gym.make(env_id).unwrapped
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    for _ in range(10_000):
+        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        if terminated or truncated:
+            break
+    assert terminated or truncated
+    with pytest.raises(ResetNeeded, match="the episode has ended"):
+        env.step(env.action_space.sample())
+    env.reset(seed=1)
+    env.step(env.action_space.sample())  # a new episode plays
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_render_modes_are_named(env_id):
+    with pytest.warns(UserWarning, match="render_modes"), pytest.raises(ValueError, match="render_mode must be None"):
+        gym.make(env_id, render_mode="human")  # Gymnasium warns, the env says which modes exist (none)
+    with pytest.raises(NotImplementedError, match="no render modes"):
+        gym.make(env_id).unwrapped.render()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
 def test_step_before_reset_is_refused(env_id):
     with pytest.raises(ResetNeeded):
         hybrid_domains.ENV_CLASSES[env_id]().step(a_valid_action(env_id))

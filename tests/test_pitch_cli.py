@@ -21,6 +21,10 @@ from tests.test_cli import run_error
         (["pitch", "dribbler", "--server", "x", "--out", "results.json"], "must end with .csv"),
         (["pitch", "dribbler", "--episodes", "0"], "must be in 1 .. 10,000,000"),
         (["pitch", "dribbler", "--server", "x", "--world-seed", "4294967295"], "--world-seed: world_seed must be an integer"),
+        (
+            ["pitch", "dribbler", "--server", "x", "--timeout", "1e12"],
+            "--timeout: timeout must be a number of seconds in (0, 3600]",
+        ),
     ],
 )
 def test_pitch_errors(capsys, argv: list[str], message: str) -> None:

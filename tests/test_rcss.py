@@ -551,3 +551,17 @@ def test_the_recorder_records_the_shipped_goal_cases_and_they_replay(tmp_path: P
     shipped = list(validate.read_cases(validate.GOLDEN_DIR / "rcss-goal.jsonl"))
     assert [(c["id"], c["setup"], c["commands"]) for c in fresh] == [(c["id"], c["setup"], c["commands"]) for c in shipped]
     assert all(validate.replay_case(case).passed for case in fresh)
+
+
+@pytest.mark.parametrize(
+    ("ports", "timeout", "message"),
+    [
+        ((70000, 6001), 1.0, r"ports.player must be a port number in 1 .. 65535, got 70000"),
+        ((6000, -1), 1.0, r"ports.trainer must be a port number in 1 .. 65535, got -1"),
+        (("abc", 6001), 1.0, r"ports.player must be a port number in 1 .. 65535, got 'abc'"),
+        ((6000, 6001), 1e12, r"timeout must be a number of seconds in \(0, 3600\], got 1000000000000\.0"),
+    ],
+)
+def test_bad_ports_and_timeouts_are_refused_before_any_socket(ports, timeout, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        connect("127.0.0.1", ServerPorts(*ports, 0), timeout=timeout)

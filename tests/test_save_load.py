@@ -125,3 +125,61 @@ def test_load_other_algorithm_file(tmp_path, case):
             other.make(ParameterizedTargetEnv(), seed=0).save(tmp_path / "other.zip")
             with pytest.raises(ValueError, match=rf"{case.algo.__name__} needs a \w+Policy"):
                 case.algo.load(tmp_path / "other.zip")
+
+
+def rewritten(source, target, drop=(), data=lambda fields: fields):
+    """Copy the model file ``source`` to ``target`` without the members ``drop`` and with its ``data`` edited."""
+    import json
+
+    with zipfile.ZipFile(source) as zin, zipfile.ZipFile(target, "w") as zout:
+        for item in zin.infolist():
+            if item.filename not in drop:
+                raw = zin.read(item)
+                zout.writestr(item, json.dumps(data(json.loads(raw))) if item.filename == "data" else raw)
+    return target
+
+
+@algos(ALGO_CLASSES)
+def test_a_damaged_model_file_is_one_clear_error(tmp_path, case):
+    """Truncated, without its optimizer state or policy_class, NaN weights, a learning rate that is no number: each a
+    ValueError naming the file or the field and what is wrong, never SB3's KeyError or assertion (or a NaN decision)."""
+    model = case.make(ParameterizedTargetEnv(), seed=0)
+    model.save(tmp_path / "model.zip")
+    raw = (tmp_path / "model.zip").read_bytes()
+    (tmp_path / "truncated.zip").write_bytes(raw[: len(raw) // 2])
+    with pytest.raises(ValueError, match=r"truncated.zip is not a"):
+        case.algo.load(tmp_path / "truncated.zip")
+    no_class = rewritten(tmp_path / "model.zip", tmp_path / "no_class.zip", data=lambda d: d.pop("policy_class") and d)
+    with pytest.raises(ValueError, match=r"no_class.zip is not a usable saved model: .* lacks the fields \['policy_class'\]"):
+        case.algo.load(no_class)
+    no_optimizer = rewritten(tmp_path / "model.zip", tmp_path / "no_optimizer.zip", drop=("policy.optimizer.pth",))
+    try:
+        loaded = case.algo.load(no_optimizer)  # loads where acting needs no optimizer state
+    except ValueError as error:
+        assert "no_optimizer.zip is not a complete" in str(error)
+    else:
+        assert loaded.predict(model.observation_space.sample(), deterministic=True)[0] is not None
+    with th.no_grad():
+        for parameter in model.policy.parameters():
+            parameter.fill_(float("nan"))
+    model.save(tmp_path / "nan.zip")
+    with pytest.raises(ValueError, match=r"nan.zip is not a usable saved model: .* holds NaN or inf values"):
+        case.algo.load(tmp_path / "nan.zip")
+    with pytest.raises(ValueError, match=r"learning_rate must be .*got '?abc"):
+        case.algo.load(tmp_path / "model.zip", custom_objects={"learning_rate": "abc"})
+
+
+@algos(ALGO_CLASSES)
+def test_save_removes_a_killed_saves_temporaries_and_names_a_file_in_the_way(tmp_path, case):
+    import subprocess
+    import sys
+
+    model = case.make(ParameterizedTargetEnv(), seed=0)
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    leftover = tmp_path / f".model.zip.sb3aac-{int(dead.stdout)}.tmpabc.zip"  # what a save killed with -9 leaves
+    leftover.write_bytes(b"half a model")
+    model.save(tmp_path / "model.zip")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.zip"]
+    (tmp_path / "file").write_text("not a folder")
+    with pytest.raises(NotADirectoryError, match="its folder, or one above it, is a file"):
+        model.save(tmp_path / "file" / "model.zip")

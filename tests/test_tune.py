@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import importlib.util
 import os
 import shlex
 import signal
@@ -149,13 +150,26 @@ def test_resume_with_other_settings_is_refused(tmp_path: Path, capsys) -> None:
         ("sqlite:///{dir}/file/study.db", None, "cannot create the folder"),
         ("{dir}/file/study.log", None, "cannot create the folder"),
         ("{dir}", None, "is a directory"),
+        ("sqlite:///", None, "is an in-memory database, which keeps nothing"),
+        ("sqlite:///:memory:", None, "is an in-memory database, which keeps nothing"),
+        ("{dir}/fifo", None, "is not a regular file (a FIFO"),
+        ("sqlite:///{dir}/fifo", None, "is not a regular file (a FIFO"),
+        ("{dir}/zero.log", None, "is not a regular file (a FIFO"),
+        ("postgresql://nobody@127.0.0.1:1/db", None, "SQLAlchemy's driver for postgresql://, is not installed"),
     ],
-    ids=["corrupt-sqlite", "corrupt-journal", "foreign-journal", "unwritable-sqlite", "unwritable-journal", "directory"],
+    ids=[
+        *("corrupt-sqlite", "corrupt-journal", "foreign-journal", "unwritable-sqlite", "unwritable-journal", "directory"),
+        *("in-memory", "in-memory-named", "fifo-journal", "fifo-sqlite", "journal-linked-to-dev-zero", "postgresql-driver"),
+    ],
 )
 def test_bad_storage_is_one_line_and_left_alone(
     tmp_path: Path, capsys, storage: str, content: bytes | None, message: str
 ) -> None:
     (tmp_path / "file").write_text("a regular file, so no folder can be made under it")
+    os.mkfifo(tmp_path / "fifo")  # opening it to read would wait for a writer forever
+    (tmp_path / "zero.log").symlink_to("/dev/zero")  # read without end
+    if "postgresql" in storage and importlib.util.find_spec("psycopg") is not None:
+        pytest.skip("psycopg, SQLAlchemy's default PostgreSQL driver, is installed here")
     for name in ("bad.db", "bad.log"):
         if content is not None:
             (tmp_path / name).write_bytes(content)

@@ -312,6 +312,16 @@ def test_grid_functions_agree_with_brute_force(dims, data):
 # --------------------------------------------------------------------------------------------------------------------
 
 
+def test_sb3_check_env_fails_on_a_raw_env_where_gymnasiums_passes():
+    """What the quick start's "Checking an env" says: SB3's checker has no Tuple action spaces; Gymnasium's checks
+    these envs (and SB3's checks them behind a wrapper, below)."""
+    from gymnasium.utils.env_checker import check_env as gymnasium_check_env
+
+    with pytest.warns(UserWarning, match="Dict or Tuple space"), pytest.raises(ValueError):
+        check_env(ParameterizedTargetEnv())
+    gymnasium_check_env(ParameterizedTargetEnv())
+
+
 @pytest.mark.parametrize("wrapper", WRAPPERS)
 @pytest.mark.parametrize("layout", LAYOUTS)
 def test_sb3_check_env_passes(wrapper, layout):

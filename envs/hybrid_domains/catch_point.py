@@ -16,11 +16,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from gymnasium.error import ResetNeeded
 
+from hybrid_domains.episodes import EpisodicEnv
 from hybrid_domains.actions import float32_box, parse_nested
 
 MOVE, CATCH = 0, 1
@@ -36,7 +35,7 @@ SPEED_MAX = FORCE * DT / DAMPING  # |v'| <= (1 - damping) |v| + force dt, from r
 OBSERVATION_NAMES = ("vx", "vy", "target_dx", "target_dy")
 
 
-class CatchPointEnv(gym.Env[np.ndarray, tuple[Any, ...]]):
+class CatchPointEnv(EpisodicEnv[np.ndarray]):
     """## Description
 
     Catching Point (H-PPO, Fan et al. 2019) as implemented in the HyAR code (Li et al. 2022, where HyAR-TD3 catches
@@ -72,11 +71,12 @@ class CatchPointEnv(gym.Env[np.ndarray, tuple[Any, ...]]):
     2. Truncation: ``max_steps`` (25, HyAR's episode length) steps.
 
     An invalid action (wrong structure, a type outside 0..1, a non-real or non-finite direction, a non-empty catch
-    parameter) raises ``ValueError`` and changes nothing; :meth:`step` before :meth:`reset` raises ``ResetNeeded``.
+    parameter) raises ``ValueError`` and changes nothing; :meth:`step` before :meth:`reset`, or after the episode ended,
+    raises ``ResetNeeded``.
 
     ## Arguments
 
-    ``max_steps`` (25). No rendering.
+    ``max_steps`` (25). No rendering (``render_mode`` None only).
 
     ## Version History
 
@@ -84,9 +84,8 @@ class CatchPointEnv(gym.Env[np.ndarray, tuple[Any, ...]]):
       rules of HyAR's training scripts inside the env.
     """
 
-    metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012  (Gymnasium declares it so)
-
-    def __init__(self, max_steps: int = 25) -> None:
+    def __init__(self, max_steps: int = 25, render_mode: str | None = None) -> None:
+        self._check_render_mode(render_mode)
         if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:  # type: ignore[redundant-expr]
             raise ValueError(f"max_steps must be an integer >= 1, got {max_steps!r}")
         self.max_steps = max_steps
@@ -110,9 +109,7 @@ class CatchPointEnv(gym.Env[np.ndarray, tuple[Any, ...]]):
         self.misses, self.steps = 0, 0
         return self._observation(), {"caught": False}
 
-    def step(self, action: tuple[Any, ...]) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        if self.steps < 0:
-            raise ResetNeeded("Call reset() before step(): the episode has not started")
+    def _step(self, action: tuple[Any, ...]) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         k, parameters = parse_nested(action, PARAMETER_SIZES)
         fx = fy = 0.0
         if k == MOVE:

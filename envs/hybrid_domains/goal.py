@@ -13,11 +13,10 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from gymnasium.error import ResetNeeded
 
+from hybrid_domains.episodes import EpisodicEnv
 from hybrid_domains.actions import float32_box, parse_nested
 
 # gym_goal/envs/config.py ("taken from the robot soccer server manual 7.07"); lengths in metres, one step = one cycle.
@@ -255,7 +254,7 @@ def action_space() -> spaces.Tuple[Any]:
     return spaces.Tuple((spaces.Discrete(len(ACTION_NAMES)), spaces.Tuple(boxes)))
 
 
-class GoalEnv(gym.Env[tuple[np.ndarray, int], tuple[Any, ...]]):
+class GoalEnv(EpisodicEnv[tuple[np.ndarray, int]]):
     """## Description
 
     Robot Soccer Goal (Masson, Ranchod & Konidaris, "Reinforcement Learning with Parameterized Actions", AAAI 2016),
@@ -313,11 +312,11 @@ class GoalEnv(gym.Env[tuple[np.ndarray, int], tuple[Any, ...]]):
 
     ``info``: ``goal`` (bool) and ``cycles`` (simulated cycles of this action, not capped). An invalid action (wrong
     structure, a type outside 0..2, non-real or non-finite parameters) raises ``ValueError`` and changes nothing;
-    :meth:`step` before :meth:`reset` raises ``ResetNeeded``.
+    :meth:`step` before :meth:`reset`, or after the episode ended, raises ``ResetNeeded``.
 
     ## Arguments
 
-    None (``gym.make("Goal-v0")``). No rendering.
+    None (``gym.make("Goal-v0")``). No rendering (``render_mode`` None only).
 
     ## Version History
 
@@ -325,9 +324,8 @@ class GoalEnv(gym.Env[tuple[np.ndarray, int], tuple[Any, ...]]):
       ``reset(seed=...)`` seeds a numpy ``Generator`` (gym-goal drew from a ``RandomState``, so seeded episodes differ).
     """
 
-    metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012  (Gymnasium declares it so)
-
-    def __init__(self) -> None:
+    def __init__(self, render_mode: str | None = None) -> None:
+        self._check_render_mode(render_mode)
         self.action_space = action_space()
         self.observation_space = observation_space()
         self.player, self.keeper, self.ball = player_body(), player_body(), ball_body()
@@ -348,9 +346,7 @@ class GoalEnv(gym.Env[tuple[np.ndarray, int], tuple[Any, ...]]):
         self._actions = 0
         return self._observation(0), {"goal": False, "cycles": 0}
 
-    def step(self, action: tuple[Any, ...]) -> tuple[tuple[np.ndarray, int], float, bool, bool, dict[str, Any]]:
-        if self._actions < 0:
-            raise ResetNeeded("Call reset() before step(): the episode has not started")
+    def _step(self, action: tuple[Any, ...]) -> tuple[tuple[np.ndarray, int], float, bool, bool, dict[str, Any]]:
         k, parameters = parse_nested(action, PARAMETER_SIZES)
         param = np.clip(parameters[k], PARAMETER_LOW[k], PARAMETER_HIGH[k])
         self._actions += 1

@@ -13,11 +13,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from gymnasium.error import ResetNeeded
 
+from hybrid_domains.episodes import EpisodicEnv
 from hybrid_domains.actions import float32_box, parse_shared
 
 ACCELERATE, TURN, BRAKE = 0, 1, 2
@@ -29,7 +28,7 @@ FAILURE_REWARD = -1.0
 OBSERVATION_NAMES = ("x", "y", "speed", "cos_heading", "sin_heading", "target_x", "target_y", "distance", "in_target", "time")
 
 
-class MovingEnv(gym.Env[np.ndarray, tuple[Any, ...]]):
+class MovingEnv(EpisodicEnv[np.ndarray]):
     """## Description
 
     Moving-v0 of thomashirtz/gym-hybrid (the "Moving" task of Xiong et al. 2018 and Fan et al. 2019, as DI-engine
@@ -72,12 +71,13 @@ class MovingEnv(gym.Env[np.ndarray, tuple[Any, ...]]):
     time limit is part of the task: it gives -1 and the observation shows the time). The env never truncates.
 
     An invalid action (wrong structure, a type outside 0..2, non-real or non-finite parameters) raises ``ValueError``
-    and changes nothing; :meth:`step` before :meth:`reset` raises ``ResetNeeded``.
+    and changes nothing; :meth:`step` before :meth:`reset`, or after the episode ended,
+    raises ``ResetNeeded``.
 
     ## Arguments
 
     gym-hybrid's: ``max_turn`` (pi/2), ``max_acceleration`` (0.5), ``delta_t`` (0.005), ``max_step`` (200),
-    ``penalty`` (0.001), ``break_value`` (0.1, the brake). No rendering.
+    ``penalty`` (0.001), ``break_value`` (0.1, the brake). No rendering (``render_mode`` None only).
 
     ## Version History
 
@@ -96,7 +96,9 @@ class MovingEnv(gym.Env[np.ndarray, tuple[Any, ...]]):
         max_step: int = 200,
         penalty: float = 0.001,
         break_value: float = 0.1,
+        render_mode: str | None = None,
     ) -> None:
+        self._check_render_mode(render_mode)
         for name, value in (
             ("max_turn", max_turn),
             ("max_acceleration", max_acceleration),
@@ -136,9 +138,7 @@ class MovingEnv(gym.Env[np.ndarray, tuple[Any, ...]]):
         self.steps = 0
         return self._observation(), {"success": False}
 
-    def step(self, action: tuple[Any, ...]) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        if self.steps < 0:
-            raise ResetNeeded("Call reset() before step(): the episode has not started")
+    def _step(self, action: tuple[Any, ...]) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         k, p = parse_shared(action, len(ACTION_NAMES), 2)
         last_distance = self.distance()
         self.steps += 1

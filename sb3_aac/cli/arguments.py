@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import ast
 import contextlib
+import importlib
 import math
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -16,6 +17,15 @@ from sb3_aac.common.output_files import check_writable_dir, check_writable_file,
 
 class CliError(Exception):
     """A user error: printed as one line, exit status 2."""
+
+
+def require_extra(extra: str, what: str, *modules: str) -> None:
+    """Check, before any work, that the optional ``modules`` of ``what`` import; one line naming the extra otherwise."""
+    for module in modules:
+        try:
+            importlib.import_module(module)
+        except ImportError as error:
+            raise CliError(f"{what} needs {module} ({error}): pip install 'sb3-aac[{extra}]'") from None
 
 
 def _checked(parse: Callable[[str], Any], what: str, accept: Callable[[Any], bool], requirement: str) -> Callable[[str], Any]:

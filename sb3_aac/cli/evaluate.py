@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from sb3_aac.cli.arguments import episode_count, output_file, written
+from sb3_aac.cli.arguments import episode_count, output_file, require_extra, written
 from sb3_aac.cli.envs import PROFILE_ENV_IDS, add_perception_argument
 from sb3_aac.cli.models import load_policy
 from sb3_aac.cli.reports import print_dribble_report, reliability_figure
@@ -58,6 +58,7 @@ def cmd_reliability(args: argparse.Namespace) -> None:
     from robocup_dribble.evaluation import reliability_test
 
     out = output_file(args.out, (".png",), "--out")
+    require_extra("plots", "reliability's figure", "matplotlib")
     policy, profile = load_policy(args.model, args.profile, args.trust)
     report = reliability_test(policy, args.players, profile=profile, seed=args.seed)
     print(f"reliability test of {args.model} on {PROFILE_ENV_IDS[profile]}: {args.players} fresh players, one episode each")

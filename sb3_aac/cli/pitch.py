@@ -50,9 +50,14 @@ def add_pitch_command(add: Any, played: argparse.ArgumentParser) -> None:
 def cmd_pitch(args: argparse.Namespace) -> None:
     from robocup_dribble.evaluation import evaluate_episodes
     from robocup_dribble.rcss import ServerError, checked_profile, find_server, play_on_server, server_episodes, server_options
+    from robocup_dribble.rcss.server import checked_timeout
 
     from sb3_aac.common.statistics import mean_interval, welch_test
 
+    try:
+        checked_timeout(args.timeout)
+    except ValueError as error:
+        raise CliError(f"--timeout: {error}") from None
     out = output_file(args.out, (".csv",), "--out") if args.out else None
     if args.profile == "v11":
         raise CliError(

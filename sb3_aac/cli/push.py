@@ -7,11 +7,12 @@ import re
 import tempfile
 from typing import Any
 
-from sb3_aac.cli.arguments import CliError, add_trust_argument, episode_count, input_file, seed_int
+from sb3_aac.cli.arguments import CliError, add_trust_argument, episode_count, input_file, require_extra, seed_int
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
 from sb3_aac.cli.models import load_policy
 
 # The Hub's repository ids: a user or organisation, a slash, a name (letters, digits, '-', '_', '.'; 96 at most).
+HUB_TIMEOUT_S = 60.0  # seconds the Hub may stay silent (connecting, or between two reads) before push gives up
 REPO_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,95}/[A-Za-z0-9][A-Za-z0-9_.-]{0,95}$")
 
 
@@ -44,6 +45,8 @@ def cmd_push(args: argparse.Namespace) -> None:
         raise CliError(f"--repo-id must be USER/NAME (letters, digits, '-', '_', '.'), got {args.repo_id!r}")
     if args.dry_run and args.folder is None:
         raise CliError("--dry-run writes the files into --folder: give one")
+    if not args.dry_run:
+        require_extra("hub", "push", "huggingface_hub")
     input_file(args.model, (".zip",), "MODEL")
     model, profile = load_policy(args.model, args.profile, args.trust)
     env_id = PROFILE_ENV_IDS[profile]
@@ -86,9 +89,9 @@ def push_from(model: Any, folder: str, evaluation: Any, args: argparse.Namespace
 
 
 def hub_api() -> Any:
-    """The ``huggingface_hub.HfApi`` the upload goes through (the logged-in token)."""
-    try:
-        from huggingface_hub import HfApi
-    except ImportError:
-        raise CliError("push needs huggingface_hub: pip install sb3-aac[hub]") from None
+    """The ``huggingface_hub.HfApi`` the upload goes through (the logged-in token), on a session that gives up after
+    :data:`HUB_TIMEOUT_S` of silence (huggingface_hub's own waits forever on an endpoint that never answers)."""
+    from huggingface_hub import HfApi, get_session
+
+    get_session().timeout = HUB_TIMEOUT_S
     return HfApi()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from sb3_aac.cli.arguments import CliError, frame_rate, output_file, written
+from sb3_aac.cli.arguments import CliError, frame_rate, output_file, require_extra, written
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
 from sb3_aac.cli.models import load_policy
 
@@ -30,6 +30,7 @@ def cmd_render(args: argparse.Namespace) -> None:
     from robocup_dribble import DribbleEnv
 
     out = None if args.window else output_file(args.out, VIDEO_SUFFIXES, "--out")
+    require_extra("render", "render", "pygame", *(() if out is None else ("imageio",)))
     if out is not None and out.suffix.lower() == ".mp4":
         try:
             import imageio_ffmpeg  # noqa: F401

@@ -16,6 +16,7 @@ from sb3_aac.cli.arguments import (
     key_value,
     lane_count,
     output_dir,
+    require_extra,
     seed_int,
     step_count,
 )
@@ -96,6 +97,8 @@ def add_train_command(add: Any) -> None:
 
 def cmd_train(args: argparse.Namespace) -> None:
     """Check everything the user named, then train, save and evaluate; each file of ``--out`` is the old or a whole new one."""
+    if args.progress_bar:
+        require_extra("progress", "--progress-bar", "tqdm", "rich")
     import_gym_packages(args.gym_package)
     check_env_id(args.env)
     kwargs = hyperparameters(args.set, args.algo)
@@ -111,6 +114,8 @@ def cmd_train(args: argparse.Namespace) -> None:
         f"training {ALGOS[args.algo].class_name} {args.policy} on {args.env} for {budget}, "
         f"{args.n_envs} env(s), seed {args.seed}"
     )
+    for note in budget_notes(args, model, total_timesteps):
+        print(f"  note: {note}")
     try:
         learn(model, args, total_timesteps)
     except KeyboardInterrupt:
@@ -143,6 +148,22 @@ def training_budget(args: argparse.Namespace) -> tuple[int, str]:
         total_timesteps = args.episodes * max_episode_length(args.env)
         return total_timesteps, f"{args.episodes} episodes (at most {total_timesteps} steps)"
     return args.timesteps, f"{args.timesteps} steps"
+
+
+def budget_notes(args: argparse.Namespace, model: Any, total_timesteps: int) -> list[str]:
+    """What the user should know before training starts: a step budget an on-policy learner rounds up to whole
+    rollouts, and a model that will not be kept (no --out)."""
+    notes = []
+    rollout = getattr(model, "n_steps", 0) * args.n_envs  # the steps of one rollout of an on-policy learner
+    if args.episodes is None and rollout and total_timesteps % rollout:
+        trained = -(-total_timesteps // rollout) * rollout
+        notes.append(
+            f"{ALGOS[args.algo].class_name} collects whole rollouts of n_steps x n_envs = {rollout:,} steps, so it "
+            f"trains {trained:,} steps for the budget of {total_timesteps:,}"
+        )
+    if args.out is None:
+        notes.append("no --out: the model is evaluated and then not kept (give --out DIR to keep it)")
+    return notes
 
 
 def build_model(args: argparse.Namespace, kwargs: dict[str, Any]) -> Any:
@@ -226,10 +247,14 @@ def evaluate_greedy(model: Any, args: argparse.Namespace) -> None:
         report = evaluate_dribbling(
             model, args.eval_episodes, profile=DRIBBLE_IDS[args.env], seed=seed, perception=args.perception
         )
-        print_dribble_report(report, f"greedy evaluation on {len(report.distances)} episodes of fresh players:")
+        print_dribble_report(
+            report,
+            f"greedy evaluation on {len(report.distances)} episodes of fresh players, seed {seed} (never a training "
+            f"seed; sb3-aac evaluate MODEL --seed {seed} repeats it):",
+        )
     else:
         from stable_baselines3.common.evaluation import evaluate_policy
 
         eval_env = make_train_env(args.env, 1, seed)
         mean, std = evaluate_policy(model, eval_env, n_eval_episodes=args.eval_episodes, deterministic=True)
-        print(f"greedy evaluation over {args.eval_episodes} episodes: return {mean:.3f} +/- {std:.3f}")
+        print(f"greedy evaluation over {args.eval_episodes} episodes: return {mean:.3f} +/- {std:.3f} (seed {seed})")

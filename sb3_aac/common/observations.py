@@ -7,6 +7,9 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+# The largest observation magnitude the networks can take: their float32 inputs hold up to this, beyond it is inf.
+MAX_OBSERVATION_MAGNITUDE = float(np.finfo(np.float32).max)
+
 
 def check_box_observation_space(observation_space: spaces.Space[Any], policies: str) -> None:
     """
@@ -32,9 +35,11 @@ def observation_batch(observation: Any, observation_space: spaces.Space[Any]) ->
 
     :param observation: one observation or a batch, anything ``numpy.asarray`` takes
     :param observation_space: the ``Box`` space the observations belong to
-    :raises ValueError: for a space without a shape, a wrong observation shape, an empty batch (0 observations), or
-        NaN or inf values
+    :raises ValueError: for a space without a shape, a wrong observation shape, an empty batch (0 observations),
+        complex numbers, NaN or inf values, or finite values beyond :data:`MAX_OBSERVATION_MAGNITUDE`
     """
+    if np.iscomplexobj(observation):
+        raise ValueError(f"The observation holds complex numbers: observations are real ({observation_space})")
     obs = np.asarray(observation, dtype=np.float64)
     shape = observation_space.shape
     if shape is None:
@@ -44,6 +49,11 @@ def observation_batch(observation: Any, observation_space: spaces.Space[Any]) ->
             raise ValueError(f"Got an empty batch of shape {obs.shape}: predict needs at least one observation")
         if not np.isfinite(obs).all():
             raise ValueError(f"The observation holds NaN or inf values: {observation}")
+        if obs.size and np.abs(obs).max() > MAX_OBSERVATION_MAGNITUDE:
+            raise ValueError(
+                f"The observation holds values beyond float32's range (|x| > {MAX_OBSERVATION_MAGNITUDE:.3g}), which the "
+                f"networks cannot take: {observation}"
+            )
         return (obs.reshape(1, *shape), False) if obs.shape == shape else (obs, True)
     raise ValueError(
         f"Error: Unexpected observation shape {obs.shape} for Box environment, "

@@ -10,6 +10,7 @@ Every temporary this module makes is a hidden name beside its target that carrie
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 import shutil
@@ -120,10 +121,20 @@ def replaced_atomically(path: str | os.PathLike[str], suffix: str = "") -> Itera
     and replaces ``path`` in one step (``os.replace``); on error (or Ctrl-C) it is removed. Readers see the old file
     or the whole new one, never a part; a full disk leaves the old file as it was.
 
+    The folder is created if missing; the temporaries a killed earlier writer left there are removed first
+    (:func:`remove_stale_temporaries`).
+
     :param suffix: the temporary's suffix (some writers insist on one, e.g. ``.zip``)
+    :raises NotADirectoryError: if the folder, or one above it, is a file
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        raise NotADirectoryError(
+            errno.ENOTDIR, f"cannot write {path}: its folder, or one above it, is a file, not a folder", str(path.parent)
+        ) from None
+    remove_stale_temporaries(path.parent)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=temporary_prefix(path), suffix=suffix)
     os.close(fd)
     try:

@@ -12,6 +12,8 @@ from gymnasium import spaces
 from stable_baselines3.common.buffers import RolloutBuffer
 from stable_baselines3.common.vec_env import VecNormalize
 
+from sb3_aac.common.sizes import check_allocation
+
 
 class HybridRolloutBufferSamples(NamedTuple):
     """A minibatch (``B`` rows) as tensors; actions are packed ``[k, x]`` rows (see :mod:`sb3_aac.hppo.distributions`)."""
@@ -44,6 +46,7 @@ class HybridRolloutBuffer(RolloutBuffer):
     :param gae_lambda: GAE's lambda
     :param gamma: The discount factor
     :param n_envs: Number of parallel environments
+    :raises ValueError: if the buffer would pass :data:`~sb3_aac.common.sizes.MAX_ALLOCATION_BYTES`
     """
 
     param_log_probs: np.ndarray
@@ -58,6 +61,12 @@ class HybridRolloutBuffer(RolloutBuffer):
         gamma: float = 0.99,
         n_envs: int = 1,
     ):
+        # float32 columns per step and env: the observation, the packed action, and reward, return, episode start,
+        # value, advantage and the two log-probabilities
+        columns = int(np.prod(observation_space.shape or ())) + 1 + n_params + 7
+        check_allocation(
+            f"HybridPPO's rollout buffer (n_steps={buffer_size:,} x {n_envs:,} envs)", buffer_size * n_envs * columns, 4
+        )
         super().__init__(buffer_size, observation_space, packed_action_space(n_params), device, gae_lambda, gamma, n_envs)
 
     def reset(self) -> None:

@@ -17,7 +17,7 @@ from sb3_aac.common.action_stats import ActionStats
 from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
-from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
+from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step, check_schedule
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.hppo.buffers import HybridRolloutBuffer
 from sb3_aac.hppo.policies import HybridActorCriticPolicy, MlpPolicy
@@ -169,6 +169,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
                 raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)}")
         for name in ("clip_range", "clip_range_params", "clip_range_vf"):
             value = getattr(self, name)
+            check_schedule(name, value, allow_none=name != "clip_range")
             if isinstance(value, (int, float)) and not value > 0:
                 raise ValueError(f"{name} must be > 0 (or a schedule; None for the default), got {value}")
         for name in ("ent_coef", "param_ent_coef", "vf_coef"):

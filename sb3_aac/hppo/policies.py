@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import copy
+import math
 from typing import Any
 
 import numpy as np
@@ -103,6 +105,8 @@ class HybridActorCriticPolicy(BasePolicy):
         if optimizer_kwargs is None:
             optimizer_kwargs = {"eps": 1e-5} if optimizer_class == th.optim.Adam else {}
         check_box_observation_space(observation_space, "HybridPPO policies")
+        if isinstance(log_std_init, bool) or not isinstance(log_std_init, (int, float)) or not math.isfinite(log_std_init):  # type: ignore[redundant-expr]
+            raise ValueError(f"log_std_init must be a finite number (0: sigma = 1, half the range), got {log_std_init!r}")
         self.spec = parse_action_space(action_space)
         super().__init__(
             observation_space,
@@ -172,7 +176,8 @@ class HybridActorCriticPolicy(BasePolicy):
     def _distribution_and_value(self, obs: PyTorchObs) -> tuple[HybridDistribution, th.Tensor]:
         features = self.extract_features(obs, self.features_extractor)
         latent = self.shared_net(features)
-        distribution = self.action_dist.proba_distribution(
+        # a copy per call: predict from several threads shares no distribution state
+        distribution = copy.copy(self.action_dist).proba_distribution(
             self.type_head(self.type_net(latent)), self.mean_head(self.params_net(latent)), self.log_std
         )
         return distribution, self.value_head(self.value_net(features)).squeeze(1)

@@ -26,8 +26,9 @@ from sb3_aac.common.action_stats import ActionStats
 from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
-from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
+from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step, check_schedule
 from sb3_aac.common.model_files import check_policy_class
+from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
 from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer
 from sb3_aac.pdqn.noise import ParamNoise
@@ -210,6 +211,7 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
                 raise ValueError(f"{name} must be an integer >= 1, got {getattr(self, name)}")
         if not self.max_grad_norm > 0:
             raise ValueError(f"max_grad_norm must be > 0, got {self.max_grad_norm}")
+        check_schedule("actor_learning_rate", self.actor_learning_rate)
         if "multi_pass" in self.policy_kwargs:
             raise ValueError("policy_kwargs cannot set multi_pass: use PDQN (single pass) or MPDQN (multi-pass)")
 
@@ -254,8 +256,9 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
     def set_random_seed(self, seed: int | None = None) -> None:
         """Seed python, numpy, torch, the action space, the env, and the algorithm's own generator."""
         super().set_random_seed(seed)
-        # Exploration and minibatch draws come from this generator, not from the global numpy state.
-        self._rng = np.random.default_rng(seed)
+        # Exploration and minibatch draws come from this generator, seeded from the global state
+        # when seed is None (set_random_seed repeats runs)
+        self._rng = algorithm_generator(seed)
 
     def _excluded_save_params(self) -> list[str]:
         # Per-run state rebuilt by _setup_model (the generator is re-seeded from `seed`).

@@ -20,6 +20,17 @@ from .kernel import act_kernel, kernel_arguments, network_kernel, network_kernel
 BACKENDS = ("auto", "numpy", "numba")  # how act() computes: numba if importable, or numpy only
 
 
+def unusable_observation(x: np.ndarray) -> ValueError:
+    """The error for an observation whose sum of squares is not finite: NaN or inf values, or finite values too large
+    to compute with (their squares overflow float64, beyond about 1.3e154)."""
+    if not np.isfinite(x).all():
+        return ValueError(f"The observation holds NaN or inf values: {x}")
+    return ValueError(
+        f"The observation holds values too large to compute with (largest magnitude {np.abs(x).max():.3g}; their squares "
+        f"overflow float64): {x}"
+    )
+
+
 class RuntimePolicy:
     """
     A policy read from an exported file: greedy decisions with numpy only.
@@ -154,7 +165,7 @@ class RuntimePolicy:
             )
         x = x.reshape(-1)
         if not math.isfinite(np.dot(x, x)):  # one reduction: NaN and inf (and absurd magnitudes) reach the sum
-            raise ValueError(f"The observation holds NaN or inf values: {x}")
+            raise unusable_observation(x)
         return x
 
     def act(self, obs: Any) -> tuple[int, np.ndarray]:
@@ -180,7 +191,7 @@ class RuntimePolicy:
                 self._observation(x)  # raises the shape error
             k, dim = self._kernel(x.reshape(-1), *self._kernel_args)
             if k < 0:
-                raise ValueError(f"The observation holds NaN or inf values: {x}")
+                raise unusable_observation(x)
             return self.type_start + k, self._params_buffer[:dim].astype(self.param_dtypes[k])
         if isinstance(self._bank, (TileForward, NetworkForward, PDQNForward)):
             out = self._bank.outputs(self._bank.features(self._observation(obs)[None]))[0][0].tolist()

@@ -3,7 +3,6 @@ from __future__ import annotations
 import math
 import sys
 import time
-import zipfile
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -17,7 +16,8 @@ from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
-from sb3_aac.common.model_files import check_model_file, check_policy_class
+from sb3_aac.common.model_files import check_policy_class
+from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
 from sb3_aac.sarsa_aac.deep import DeepKernel, DeepTraces
 from sb3_aac.sarsa_aac.kernels import Kernel
@@ -185,6 +185,8 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     :param _init_setup_model: Whether or not to build the network at the creation of the instance
     """
 
+    load_device: ClassVar[str] = "cpu"  # its updates are numpy on the CPU
+
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {
         "DeepPolicy": DeepPolicy,
         "MlpPolicy": MlpPolicy,
@@ -330,8 +332,9 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     def set_random_seed(self, seed: int | None = None) -> None:
         """Seed python, numpy, torch, the action space, the env, and the algorithm's own generator."""
         super().set_random_seed(seed)
-        # All exploration draws come from this generator, not from the global numpy state.
-        self._rng = np.random.default_rng(seed)
+        # All exploration draws come from this generator, seeded from the global state
+        # when seed is None (set_random_seed repeats runs)
+        self._rng = algorithm_generator(seed)
 
     def _excluded_save_params(self) -> list[str]:
         return [
@@ -750,32 +753,3 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         self._last_dump = (self._episode_num, self.num_timesteps)
         self._dumped_in_learn = True
         self._train_stats[:] = 0
-
-    # ------------------------------------------------------------------ persistence
-
-    @classmethod
-    def load(
-        cls: type[SelfSarsaAAC],
-        path: Any,
-        env: GymEnv | None = None,
-        device: th.device | str = "cpu",
-        custom_objects: dict[str, Any] | None = None,
-        print_system_info: bool = False,
-        force_reset: bool = True,
-        **kwargs: Any,
-    ) -> SelfSarsaAAC:
-        """
-        Load the model from a zip-file (see :meth:`BaseAlgorithm.load`).
-
-        :raises ValueError: if the file is not a complete SarsaAAC model (corrupted, truncated, or another
-            algorithm's), or if ``env`` does not match the model's spaces
-        """
-        check_model_file(path)  # one ValueError naming the file for any damage, before SB3 unpickles anything
-        try:
-            return super().load(path, env, device, custom_objects, print_system_info, force_reset, **kwargs)
-        except (zipfile.BadZipFile, EOFError, AssertionError, KeyError, RuntimeError, OSError) as e:
-            if isinstance(e, FileNotFoundError):
-                raise
-            raise ValueError(
-                f"{path} is not a complete SarsaAAC model (corrupted, truncated, or saved by another algorithm): {e!r}"
-            ) from e

@@ -31,6 +31,7 @@ import numpy as np
 import torch as th
 from torch import nn
 
+from sb3_aac.common.sizes import check_allocation
 from sb3_aac.sarsa_aac.approximators import NumpyBank
 from sb3_aac.sarsa_aac.lane_steps import tile_steps, traced_tile_steps
 from sb3_aac.runtime.forward import TileForward
@@ -70,8 +71,12 @@ class TileLayout(NamedTuple):
     n_features: int
 
 
-def tile_layout(groups: Sequence[tuple[int, ...]], tiles_per_input: int, n_tilings: int) -> TileLayout:
-    """The grids of ``n_tilings`` asymmetrically offset tilings of every group (see the module docstring)."""
+def tile_layout(groups: Sequence[tuple[int, ...]], tiles_per_input: int, n_tilings: int, n_outputs: int = 1) -> TileLayout:
+    """The grids of ``n_tilings`` asymmetrically offset tilings of every group (see the module docstring).
+
+    :raises ValueError: for sizes that are not whole numbers >= 1, or whose weight table (features x ``n_outputs``)
+        would pass :data:`~sb3_aac.common.sizes.MAX_ALLOCATION_BYTES` (checked before anything is built)
+    """
     # Run-time checks of user input that the annotations cannot guarantee.
     if not (isinstance(tiles_per_input, (int, np.integer)) and tiles_per_input >= 1):  # type: ignore[redundant-expr]
         raise ValueError(f"tiles_per_input must be an int >= 1, got {tiles_per_input!r}")
@@ -79,6 +84,12 @@ def tile_layout(groups: Sequence[tuple[int, ...]], tiles_per_input: int, n_tilin
         raise ValueError(f"n_tilings must be an int >= 1, got {n_tilings!r}")
     k = max(len(g) for g in groups)
     side = tiles_per_input + 1
+    n_features = n_tilings * sum(side ** len(group) for group in groups)
+    check_allocation(
+        f"TilePolicy's weight table (tiles_per_input={tiles_per_input}, n_tilings={n_tilings}: {n_features:,} features x "
+        f"{n_outputs} outputs)",
+        n_features * n_outputs,
+    )
     rows = []
     base = 0
     for group in groups:
@@ -126,7 +137,7 @@ class TileBank(NumpyBank):
             raise ValueError(f"Tile coding needs finite low < high elementwise with equal shapes, got low={low}, high={high}")
         self.n_inputs, self.n_outputs = len(low), n_outputs
         self.groups = default_tile_groups(self.n_inputs) if groups is None else check_tile_groups(groups, self.n_inputs)
-        layout = tile_layout(self.groups, tiles_per_input, n_tilings)
+        layout = tile_layout(self.groups, tiles_per_input, n_tilings, n_outputs)
         self.tiles_per_input, self.n_tilings, self.n_features = tiles_per_input, n_tilings, layout.n_features
         self.n_active = len(layout.bases)
         self.register_buffer("obs_mid", th.as_tensor((high + low) / 2))

@@ -21,21 +21,30 @@ def open_storage(spec: str) -> BaseStorage:
     over a network filesystem (SQLite there is unsafe). Missing folders of a file are created.
 
     :raises ValueError: one line saying why the storage cannot be opened (unwritable place, not a study database,
-        a journal file that is not Optuna's)
+        an in-memory database that would keep nothing, a file that is not a regular file (a FIFO, a device), a
+        journal file that is not Optuna's, a database driver that is not installed)
     """
     if "://" in spec:
-        if spec.startswith(SQLITE_PREFIX):
-            _make_parent(Path(spec[len(SQLITE_PREFIX) :]), spec)
+        if spec.startswith("sqlite:"):
+            database = spec[len(SQLITE_PREFIX) :] if spec.startswith(SQLITE_PREFIX) else ""
+            if database in ("", ":memory:") or database.startswith(":memory:?"):
+                raise ValueError(
+                    f"{spec!r} is an in-memory database, which keeps nothing after the command: give a file, e.g. "
+                    "sqlite:///study.db"
+                )
+            _check_regular_file(Path(database), spec)
+            _make_parent(Path(database), spec)
         engine_kwargs = (
             {"connect_args": {"connect_timeout": CONNECT_TIMEOUT_S}} if spec.startswith(("postgresql", "mysql")) else {}
         )
         try:
             return RDBStorage(spec, engine_kwargs=engine_kwargs)
         except Exception as error:  # sqlalchemy's errors (and a driver's ImportError) have no common base
-            raise ValueError(f"cannot open the study database {spec!r}: {_first_line(error)}") from None
+            raise ValueError(f"cannot open the study database {spec!r}: {_database_error(error, spec)}") from None
     path = Path(spec)
     if path.is_dir():
         raise ValueError(f"the journal file {spec!r} is a directory; give a file name (e.g. study.log) or a database URL")
+    _check_regular_file(path, spec)
     _make_parent(path, spec)
     try:
         _check_journal(path)
@@ -46,6 +55,25 @@ def open_storage(spec: str) -> BaseStorage:
             f"cannot read {spec!r} as an Optuna journal file ({type(error).__name__}: {_first_line(error)})"
         ) from None
     return storage
+
+
+def _check_regular_file(path: Path, spec: str) -> None:
+    """A storage file that exists must be a regular file: a FIFO would block the command, a device (a link to
+    /dev/zero) would be read without end."""
+    if path.exists() and not path.is_file():
+        raise ValueError(f"the study storage {spec!r} is not a regular file (a FIFO, a device or a socket); give a file")
+
+
+def _database_error(error: BaseException, spec: str) -> str:
+    """The line that says why a database URL cannot be opened; for a missing driver, which one SQLAlchemy wanted."""
+    cause = error.__cause__
+    if isinstance(error, ImportError) and isinstance(cause, ModuleNotFoundError) and cause.name:
+        scheme = spec.split("://", 1)[0]
+        return (
+            f"the module {cause.name!r}, SQLAlchemy's driver for {scheme}://, is not installed: install it, or name an "
+            f"installed driver in the URL ({scheme.split('+')[0]}+DRIVER://..., e.g. postgresql+psycopg2:// for psycopg2)"
+        )
+    return _first_line(error)
 
 
 def _check_journal(path: Path) -> None:

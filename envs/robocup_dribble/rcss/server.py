@@ -31,6 +31,8 @@ from types import TracebackType
 
 DEFAULT_TIMEOUT = 10.0
 """Seconds a receive waits for the server before it is an error."""
+MAX_TIMEOUT = 3600.0
+"""The longest wait allowed: a server silent for an hour is gone (and far longer waits overflow the socket's timer)."""
 STOP_GRACE = 2.0
 """Seconds a stopped server has to exit after SIGTERM before it is killed."""
 MAX_MESSAGE = 65536
@@ -41,6 +43,26 @@ Log = Callable[[str, str, str], None]
 _CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000
 _PR_SET_PDEATHSIG = 1
 _SIOCGIFFLAGS, _SIOCSIFFLAGS, _IFF_UP = 0x8913, 0x8914, 0x1
+
+
+def checked_timeout(timeout: object) -> float:
+    """``timeout`` as seconds.
+
+    :raises ValueError: unless it is a number in ``(0, MAX_TIMEOUT]``
+    """
+    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or not 0 < timeout <= MAX_TIMEOUT:
+        raise ValueError(f"timeout must be a number of seconds in (0, {MAX_TIMEOUT:g}], got {timeout!r}")
+    return float(timeout)
+
+
+def checked_port(name: str, port: object) -> int:
+    """``port`` as a UDP port number.
+
+    :raises ValueError: unless it is a whole number in 1 .. 65535
+    """
+    if isinstance(port, bool) or not isinstance(port, int) or not 1 <= port <= 65535:
+        raise ValueError(f"{name} must be a port number in 1 .. 65535, got {port!r}")
+    return port
 
 
 class ServerError(RuntimeError):
@@ -79,9 +101,7 @@ class Endpoint:
         alive: Callable[[], None] | None = None,
         log: Log | None = None,
     ) -> None:
-        if not timeout > 0:
-            raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
-        self.name, self.sock, self.address, self.timeout = name, sock, address, float(timeout)
+        self.name, self.sock, self.address, self.timeout = name, sock, address, checked_timeout(timeout)
         self._answered = False
         self._alive = alive
         self._log = log
@@ -128,7 +148,13 @@ def connect(
     host: str, ports: ServerPorts, timeout: float = DEFAULT_TIMEOUT, log: Log | None = None
 ) -> tuple[Endpoint, Endpoint]:
     """UDP endpoints ``(player, trainer)`` to a server that is already running at ``host`` (the caller keeps it on
-    loopback, or where it likes)."""
+    loopback, or where it likes).
+
+    :raises ValueError: for a port outside 1 .. 65535 or a timeout outside ``(0, MAX_TIMEOUT]``
+    """
+    checked_port("ports.player", ports.player)
+    checked_port("ports.trainer", ports.trainer)
+    checked_timeout(timeout)
     family = socket.getaddrinfo(host, ports.player, type=socket.SOCK_DGRAM)[0][0]
     return (
         Endpoint("player", socket.socket(family, socket.SOCK_DGRAM), (host, ports.player), timeout, log=log),
@@ -158,7 +184,7 @@ class ServerProcess:
         if reserved:
             raise ValueError(f"options {reserved} are set by ServerProcess itself (ports and log paths)")
         self.options = dict(options)
-        self.timeout = float(timeout)
+        self.timeout = checked_timeout(timeout)
         self.pid = 0
         self.ports = ServerPorts(0, 0, 0)
         self.folder: Path | None = None

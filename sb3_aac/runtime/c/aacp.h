@@ -46,9 +46,9 @@
  * Differences from the Python reader, each only in what a file's free-form metadata may hold: the JSON
  * parser is strict (no NaN/Infinity literals), nests at most AACP_MAX_NESTING deep, holds at most
  * AACP_MAX_JSON_VALUES values, and refuses integers outside int64 where the header needs a number (type_start).
- * C99 cannot tell a regular file from a pipe: aacp_load_file reads a file header first, as the Python
- * reader does, so a device or endless stream is refused after its first 16 bytes (no magic), but reading
- * a pipe that never writes waits.
+ * aacp_load_file reads a file header first, as the Python reader does, so a device or endless stream is
+ * refused after its first 16 bytes (no magic); on POSIX systems a named pipe (FIFO), whose opening would wait
+ * for a writer, is refused before it is opened (C99 alone cannot tell one from a file).
  *
  * License: MIT (part of sb3-aac).
  */
@@ -83,7 +83,7 @@ enum aacp_code {
     AACP_ERR_ARRAY = 9,       /* an array is missing, misshapen or misplaced */
     AACP_ERR_VALUE = 10,      /* an array holds NaN/inf or values out of their range */
     AACP_ERR_MEMORY = 11,     /* out of memory */
-    AACP_ERR_OBSERVATION = 12 /* the observation holds NaN or inf values */
+    AACP_ERR_OBSERVATION = 12 /* the observation holds NaN or inf values, or values whose squares overflow */
 };
 
 typedef struct aacp_error {
@@ -147,6 +147,9 @@ const char *aacp_code_name(int code);                      /* "AACP_ERR_CHECKSUM
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__unix__) || defined(__APPLE__)
+#include <sys/stat.h>
+#endif
 
 #ifdef __cplusplus
 extern "C" {
@@ -1749,12 +1752,25 @@ done:
     return code;
 }
 
+/* 1 if path names a named pipe (FIFO): opening one to read waits for a writer, maybe for ever (POSIX only). */
+static int aacp__is_fifo(const char *path) {
+#if defined(__unix__) || defined(__APPLE__)
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISFIFO(st.st_mode);
+#else
+    (void)path;
+    return 0;
+#endif
+}
+
 int aacp_load_file(const char *path, aacp_policy **policy, aacp_error *error) {
     FILE *f;
     int code;
     if (!policy || !path)
         return aacp__set(error, AACP_ERR_ARGUMENT, "aacp_load_file: path or policy is NULL");
     *policy = NULL;
+    if (aacp__is_fifo(path))
+        return aacp__set(error, AACP_ERR_IO, "cannot read %s: it is a named pipe (FIFO), not a policy file", path);
     f = fopen(path, "rb");
     if (!f) {
         /* sb3_aac.export_policy appends ".aacp" to a name without a suffix; accept that name too. */
@@ -1940,8 +1956,13 @@ static int aacp__act(aacp_policy *p, const double *x, aacp_action *action, aacp_
     int tiles = p->features == AACP__TILES, networks = p->head == AACP__NETWORKS, pdqn = p->head == AACP__PDQN;
     for (i = 0; i < p->d; i++)
         total += x[i] * x[i];
-    if (!isfinite(total)) /* one reduction, as RuntimePolicy: NaN, inf (and absurd magnitudes) reach the sum */
-        return aacp__set(error, AACP_ERR_OBSERVATION, "the observation holds NaN or inf values");
+    if (!isfinite(total)) { /* one reduction, as RuntimePolicy: NaN, inf (and absurd magnitudes) reach the sum */
+        for (i = 0; i < p->d; i++)
+            if (!isfinite(x[i]))
+                return aacp__set(error, AACP_ERR_OBSERVATION, "the observation holds NaN or inf values");
+        return aacp__set(error, AACP_ERR_OBSERVATION,
+                         "the observation holds values too large to compute with (their squares overflow double)");
+    }
     if (tiles) {
         for (i = 0; i < p->c; i++) {
             int64_t feature = p->tile_bases[i];
