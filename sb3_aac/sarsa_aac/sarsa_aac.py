@@ -350,6 +350,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
             *super()._excluded_save_params(),
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
             *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_action_stats"),
+            "parameter_critic",  # its weights are saved as a state dict where it exists (_get_torch_save_params)
             *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_dumped_in_learn", "_traces", "_trace_hits"),
         ]
 
