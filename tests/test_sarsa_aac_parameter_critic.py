@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import torch as th
 from gymnasium import spaces
+from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
 from sb3_aac.common.envs import ParameterizedTargetEnv
@@ -150,3 +151,28 @@ def test_export_decides_as_predict(tmp_path):
 def test_unknown_parameter_update():
     with pytest.raises(ValueError, match="parameter_update must be one of"):
         SarsaAAC("TilePolicy", ParameterizedTargetEnv(), parameter_update="dpg")
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+def test_reward_units_do_not_change_what_the_critic_teaches(policy):
+    """Rewards x0.02 or x50: the critic's outputs scale with the rewards, so its gate, and the greedy actions, do not
+    change."""
+    obs = np.random.default_rng(5).uniform(-1, 1, (500, 2))
+    greedy = {}
+    for scale in (0.02, 50.0):
+        env = make_vec_env(
+            ParameterizedTargetEnv,
+            n_envs=4,
+            seed=0,
+            wrapper_class=gym.wrappers.TransformReward,
+            wrapper_kwargs=dict(func=lambda r, scale=scale: r * scale),
+        )
+        model = SarsaAAC(policy, env, seed=0, parameter_update="critic")
+        before = model.policy.evaluate(obs)[0][:, model.policy.param_slice]
+        model.learn(2_000)
+        out, _ = model.policy.evaluate(obs)
+        assert np.abs(out[:, model.policy.param_slice] - before).max() > 1e-2  # the critic let the actor move
+        greedy[scale] = out[:, model.policy.q_slice].argmax(1), out[:, model.policy.param_slice]
+    (types_small, params_small), (types_large, params_large) = greedy[0.02], greedy[50.0]
+    assert (types_small == types_large).mean() >= 0.99
+    np.testing.assert_allclose(params_small, params_large, atol=1e-6)
