@@ -8,7 +8,9 @@ layers of 64) on the env's own actions, on one lane and on ``--lanes`` lanes. Ea
 steps (TD3's replay buffer fills past ``learning_starts``, numba and numpy warm up), then ``--steps`` steps are
 timed; the figure is the best of ``--repeats`` timings. One torch and one BLAS thread.
 
-Usage: ``python -m benchmarks.speed.deep_speed [--env navigation|RoboCupDribblePaper-v0] [--steps 3000] [--lanes 16]``
+Usage: ``python -m benchmarks.speed.deep_speed [--env navigation|RoboCupDribblePaper-v0] [--steps 3000] [--lanes 16]
+[--parameter-update cacla|critic]`` (SarsaAAC's ``parameter_update``: the paper's CACLA, the default, or with the
+critic of the parameters)
 
 Target: ``DeepPolicy`` >= 5x TD3's env steps per second on the same env. Single runs on a shared machine:
 report the load average (printed) with the numbers.
@@ -40,6 +42,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--warmup", type=int, default=500, help="untimed env steps first (TD3 learns from step 100)")
     parser.add_argument("--repeats", type=int, default=2, help="timed runs (the best is reported)")
     parser.add_argument("--lanes", type=int, default=16, help="lanes of the second DeepPolicy run")
+    parser.add_argument("--parameter-update", default="cacla", help="SarsaAAC's parameter_update: cacla or critic")
     args = parser.parse_args(argv)
     th.set_num_threads(1)
     env_id = NavigationEnv if args.env == "navigation" else args.env
@@ -47,11 +50,13 @@ def main(argv: list[str] | None = None) -> None:
 
     td3_env = make_vec_env(env_id, n_envs=1, seed=0, wrapper_class=FlattenParameterizedAction)
     td3 = steps_per_second(TD3("MlpPolicy", td3_env, seed=0, device="cpu"), args.steps, args.warmup, args.repeats)
-    print(f"{'TD3 (1 lane, 1 gradient step per transition)':48s} {td3:10.0f}")
+    print(f"{'TD3 (1 lane, 1 gradient step per transition)':64s} {td3:10.0f}")
     for lanes in (1, args.lanes):
-        model = SarsaAAC("DeepPolicy", make_vec_env(env_id, n_envs=lanes, seed=0), seed=0, trace_lambda=0.8)
+        env = make_vec_env(env_id, n_envs=lanes, seed=0)
+        model = SarsaAAC("DeepPolicy", env, seed=0, trace_lambda=0.8, parameter_update=args.parameter_update)
         deep = steps_per_second(model, args.steps, args.warmup, args.repeats)
-        print(f"{f'SarsaAAC DeepPolicy ({lanes} lanes, trace_lambda=0.8)':48s} {deep:10.0f}   {deep / td3:6.1f}x TD3")
+        name = f"SarsaAAC DeepPolicy ({lanes} lanes, trace_lambda=0.8, {args.parameter_update})"
+        print(f"{name:64s} {deep:10.0f}   {deep / td3:6.1f}x TD3")
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
 from sb3_aac.sarsa_aac.deep import DeepKernel, DeepTraces
 from sb3_aac.sarsa_aac.kernels import Kernel
+from sb3_aac.sarsa_aac.parameter_critic import ParameterCritic, check_parameter_update
 from sb3_aac.sarsa_aac.tile_coding import TileKernel, TileTraces
 from sb3_aac.sarsa_aac.policies import DeepPolicy, MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
@@ -161,6 +162,9 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     :param exploration_final_eps: Final epsilon (or temperature)
     :param param_noise_initial: Initial standard deviation of the Gaussian noise on the scaled parameters
     :param param_noise_final: Final standard deviation of the parameter noise
+    :param parameter_update: The parameter actor's update: ``"cacla"`` (the paper's: toward the executed parameters
+        where ``delta > 0``) or ``"critic"`` (toward them where a critic of the parameters, learned online at the
+        critic's rate, says they gain; :mod:`sb3_aac.sarsa_aac.parameter_critic`)
     :param trace_lambda: The eligibility-trace decay ``lambda`` in ``[0, 1]`` of the critic and the action-type
         actor; 0 (the default) is the one-step update; ``> 0`` needs TilePolicy or DeepPolicy
     :param replacing_traces: Replacing traces (a visited feature's trace is set to 1, and its traces of the
@@ -217,6 +221,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         exploration_final_eps: float = 0.05,
         param_noise_initial: float = 0.3,
         param_noise_final: float = 0.05,
+        parameter_update: str = "cacla",
         trace_lambda: float = 0.0,
         replacing_traces: bool = True,
         info_keywords: tuple[str, ...] = ("distance", "ball_lost"),
@@ -256,6 +261,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         self.exploration_final_eps = exploration_final_eps
         self.param_noise_initial = param_noise_initial
         self.param_noise_final = param_noise_final
+        self.parameter_update = parameter_update
         self.trace_lambda = trace_lambda
         self.replacing_traces = replacing_traces
         self._set_info_keywords(info_keywords)
@@ -290,6 +296,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         for name in ("exploration_initial_eps", "exploration_final_eps", "param_noise_initial", "param_noise_final"):
             if not (isinstance(getattr(self, name), (int, float, np.floating)) and 0 <= getattr(self, name) < math.inf):
                 raise ValueError(f"{name} must be a finite number >= 0, got {getattr(self, name)!r}")
+        check_parameter_update(self.parameter_update)
         if not (isinstance(self.trace_lambda, (int, float, np.floating)) and 0 <= self.trace_lambda <= 1):  # type: ignore[redundant-expr]
             raise ValueError(f"trace_lambda must be in [0, 1] (0: one-step updates), got {self.trace_lambda!r}")
         if not isinstance(self.replacing_traces, (bool, np.bool_)):
@@ -318,6 +325,8 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
                 f"trace_lambda > 0 (got {self.trace_lambda}) needs linear tile heads (TilePolicy) or DeepPolicy; "
                 f"{type(self.policy).__name__} learns with one-step updates only (trace_lambda=0)"
             )
+        # The critic of the parameters (parameter_update="critic"; None for the paper's CACLA).
+        self.parameter_critic = ParameterCritic(self.policy) if self.parameter_update == "critic" else None
         # The action a' chosen at _last_obs and not yet executed: (obs (n, D), k (n,), scaled params (n, P)).
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         # The lanes' eligibility traces of the episodes under way (None with trace_lambda == 0 or before learn).
@@ -336,11 +345,15 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         # when seed is None (set_random_seed repeats runs)
         self._rng = algorithm_generator(seed)
 
+    def _get_torch_save_params(self) -> tuple[list[str], list[str]]:
+        return (["policy"] if self.parameter_critic is None else ["policy", "parameter_critic"]), []
+
     def _excluded_save_params(self) -> list[str]:
         return [
             *super()._excluded_save_params(),
             # Per-run state rebuilt by _setup_model / learn (the generator is re-seeded from `seed`).
             *("_pending", "_rng", "_kernel", "_lr", "_rows", "_td_chunks", "_train_stats", "_action_stats"),
+            "parameter_critic",  # its weights are saved as a state dict where it exists (_get_torch_save_params)
             *("_hidden_gain", "_lane_returns", "_finite_weights", "_last_dump", "_dumped_in_learn", "_traces", "_trace_hits"),
         ]
 
@@ -423,6 +436,8 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         if self.device.type != "cpu":
             self.policy.to("cpu")  # the updates are numpy on CPU storage
         self._kernel = self.policy.rebind()
+        if self.parameter_critic is not None:
+            self.parameter_critic.reset_kernel()
         if self._pending is None or self._last_obs is not obs_before:
             obs = self._last_obs.astype(np.float64).reshape(self.n_envs, -1)  # type: ignore[union-attr]
             self._observe(obs)
@@ -537,7 +552,12 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         err = np.zeros_like(current)
         err[rows, k] = q_error
         # CACLA: move the chosen type's parameter approximators toward the executed parameters if delta > 0.
-        err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
+        if self.parameter_critic is None:
+            err[:, ps] = (params - current[:, ps]) * policy.param_table[(delta > 0).view(np.uint8), k]
+        else:
+            err[:, ps] = self.parameter_critic.parameter_errors(
+                obs, k, params, current[:, ps], delta, self._lr[vi], self._hidden_gain[vi], self.param_noise
+            )
         err[:, vi] = delta
         if isinstance(kernel, DeepKernel):
             assert self._traces is None or isinstance(self._traces, DeepTraces)
