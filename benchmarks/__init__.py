@@ -47,3 +47,14 @@ Outside the grid:
 
 The soak test is a script beside the test suite (``python tests/soak.py``).
 """
+
+import os
+
+# One BLAS/OpenMP thread per process, set when this package is first imported, so before any of its modules imports
+# numpy or torch (``python -m benchmarks.X`` imports the package first); spawned workers inherit it, Ray tasks get it
+# through :func:`benchmarks.workers.worker_env`. On a busy two-core machine OpenBLAS's own threads made SarsaAAC's
+# small matrix products up to 70x slower (256 lanes, RbfPolicy: 15 ms instead of 0.2 ms per forward pass), and with
+# two workers on two cores some configs (RbfMlpPolicy with 20 hidden units) up to 7x slower.
+SINGLE_THREAD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+for _name, _value in SINGLE_THREAD_ENV.items():
+    os.environ.setdefault(_name, _value)

@@ -21,26 +21,22 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import time
 from collections.abc import Callable
 from typing import Any
 
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+import numpy as np
+import torch as th
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.vec_env import VecEnv
 
-import numpy as np  # noqa: E402
-import torch as th  # noqa: E402
-from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
-from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
-
-from benchmarks import domains, significance  # noqa: E402
-from benchmarks.adapters import FlatActionAdapter, adapter_for, build_baseline  # noqa: E402
-from benchmarks.learning import iqm_ci, navigation_success  # noqa: E402
-from benchmarks.presets import BASELINES, FINAL_SEED, PLATFORM_ID  # noqa: E402
-from benchmarks.zoo_hyperparams import settings  # noqa: E402
-from sb3_aac import FlattenParameterizedAction, HybridPPO  # noqa: E402
-from sb3_aac.common.envs import NavigationEnv  # noqa: E402
+from benchmarks import domains, significance
+from benchmarks.adapters import FlatActionAdapter, adapter_for, build_baseline
+from benchmarks.learning import iqm_ci, navigation_success
+from benchmarks.presets import BASELINES, FINAL_SEED, PLATFORM_ID
+from benchmarks.zoo_hyperparams import settings
+from sb3_aac import FlattenParameterizedAction, HybridPPO
+from sb3_aac.common.envs import NavigationEnv
 
 ENV_IDS = {"platform": PLATFORM_ID, "paper": "RoboCupDribblePaper-v0", "v19": "RoboCupDribble-v0", "nav": "sb3_aac/Navigation"}
 DEFAULT_STEPS = {"platform": 100_000, "paper": 50_000, "v19": 50_000, "nav": 100_000}

@@ -52,28 +52,22 @@ from __future__ import annotations
 
 import argparse
 import ast
-import os
 import time
 from collections.abc import Callable
 from typing import Any
 
-# One BLAS thread: on a busy two-core machine OpenBLAS's own threads made SarsaAAC's small matrix products up to 70x
-# slower (256 lanes, RbfPolicy: 15 ms instead of 0.2 ms per forward pass). Set before numpy is imported.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+import numpy as np
+import torch as th
+from scipy import stats
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.evaluation import evaluate_policy
+from stable_baselines3.common.vec_env import VecEnv
 
-import numpy as np  # noqa: E402
-import torch as th  # noqa: E402
-from scipy import stats  # noqa: E402
-from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
-from stable_baselines3.common.evaluation import evaluate_policy  # noqa: E402
-from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
-
-from benchmarks import domains  # noqa: E402
-from benchmarks.presets import EVAL_SEED, FINAL_SEED  # noqa: E402
-from sb3_aac import SarsaAAC, SelectObservation  # noqa: E402
-from sb3_aac.common.checkpoints import GreedyCheckpoints  # noqa: E402
-from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv  # noqa: E402
+from benchmarks import domains
+from benchmarks.presets import EVAL_SEED, FINAL_SEED
+from sb3_aac import SarsaAAC, SelectObservation
+from sb3_aac.common.checkpoints import GreedyCheckpoints
+from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
 
 # name: (policy, policy_kwargs)
 POLICIES: dict[str, tuple[str, dict[str, Any]]] = {

@@ -36,8 +36,6 @@ The suite lives here and not behind ``sb3-aac tune``: its tasks are the benchmar
 
 from __future__ import annotations
 
-import benchmarks.execution  # noqa: F401  (first: pins BLAS to one thread before numpy is imported)
-
 import argparse
 import ast
 import inspect
@@ -62,12 +60,10 @@ from benchmarks.presets import FINAL_SEED
 from benchmarks.tuning import TUNE_EVAL_SEED, TUNE_SEED
 from robocup_dribble import ENV_PROFILES
 from sb3_aac import SarsaAAC
-from sb3_aac.cli.arguments import key_value
-from sb3_aac.cli.models import hyperparameters
-from sb3_aac.cli.tune import print_trial
+from sb3_aac.common.algorithms import hyperparameters, key_value
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
 from sb3_aac.common.statistics import welch_test
-from sb3_aac.tune.report import flat_settings, literal
+from sb3_aac.tune.report import flat_settings, literal, print_trial
 from sb3_aac.tune.search_spaces import policies, search_space
 from sb3_aac.tune.storage import open_storage
 from sb3_aac.tune.study import finished_trials, load_study, run_trials, trial_kwargs

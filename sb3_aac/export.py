@@ -36,6 +36,7 @@ from sb3_aac.runtime.format import (
     written_version,
 )
 from sb3_aac.runtime.forward import network_array_shapes
+from sb3_aac.version import __version__
 
 
 ExportablePolicy = DenseBankPolicy | TilePolicy | DeepPolicy
@@ -95,8 +96,6 @@ def action_header(spec: ParameterizedActionSpec) -> dict[str, Any]:
 
 def policy_header(policy: ExportablePolicy, metadata: dict[str, Any] | None = None) -> dict[str, Any]:
     """The JSON header (without the arrays table) describing a dense-bank, tile or deep policy."""
-    from sb3_aac import __version__
-
     bank, spec = policy.approximators, policy.spec
     k, n_params = spec.n_types, spec.n_params
     n_outputs, outputs = output_layout(k, n_params)

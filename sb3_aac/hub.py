@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from sb3_aac.common.output_files import RunFolder
+from sb3_aac.version import __version__
 
 CARD = "README.md"
 MODEL = "model.zip"
@@ -41,8 +42,6 @@ def model_card(algorithm: str, policy: str, evaluation: Evaluation, has_policy_f
     """The model card: YAML metadata the Hub indexes, then what the model is, its figures and how to load it."""
     from huggingface_hub import ModelCard, ModelCardData
     from huggingface_hub.repocard_data import EvalResult
-
-    from sb3_aac import __version__
 
     results = [
         EvalResult(

@@ -27,24 +27,18 @@ from __future__ import annotations
 
 import argparse
 import ast
-import os
 
-# One BLAS thread: on a busy two-core machine OpenBLAS's own threads made SarsaAAC's small matrix products up to 70x
-# slower (256 lanes, RbfPolicy: 15 ms instead of 0.2 ms per forward pass). Set before numpy is imported.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+import gymnasium as gym
+import numpy as np
+import torch as th
+from stable_baselines3 import DQN, PPO
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.vec_env import VecEnv
 
-import gymnasium as gym  # noqa: E402
-import numpy as np  # noqa: E402
-import torch as th  # noqa: E402
-from stable_baselines3 import DQN, PPO  # noqa: E402
-from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
-from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
-
-import robocup_dribble  # noqa: E402
-from sb3_aac import DiscretizeParameterizedAction, FlattenParameterizedAction, SarsaAAC  # noqa: E402
-from benchmarks.speed.timing import load_average, median_microseconds, steps_per_second  # noqa: E402
-from sb3_aac.common.array_env import ArrayStep  # noqa: E402
+import robocup_dribble
+from sb3_aac import DiscretizeParameterizedAction, FlattenParameterizedAction, SarsaAAC
+from benchmarks.speed.timing import load_average, median_microseconds, steps_per_second
+from sb3_aac.common.array_env import ArrayStep
 
 
 class NullArrayEnv(VecEnv):

@@ -17,20 +17,15 @@ report the load average (printed) with the numbers.
 from __future__ import annotations
 
 import argparse
-import os
 
-# One BLAS thread (see benchmarks/speed/algo_speed.py). Set before numpy is imported.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+import torch as th
+from stable_baselines3 import TD3
+from stable_baselines3.common.env_util import make_vec_env
 
-import torch as th  # noqa: E402
-from stable_baselines3 import TD3  # noqa: E402
-from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
-
-import robocup_dribble  # noqa: E402, F401  (registers the dribbling env ids)
-from benchmarks.speed.timing import load_average, steps_per_second  # noqa: E402
-from sb3_aac import FlattenParameterizedAction, SarsaAAC  # noqa: E402
-from sb3_aac.common.envs import NavigationEnv  # noqa: E402
+import robocup_dribble  # noqa: F401  (registers the dribbling env ids)
+from benchmarks.speed.timing import load_average, steps_per_second
+from sb3_aac import FlattenParameterizedAction, SarsaAAC
+from sb3_aac.common.envs import NavigationEnv
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -17,22 +17,18 @@ Usage: ``python -m benchmarks.speed.hppo_speed [--env RoboCupDribblePaper-v0] [-
 from __future__ import annotations
 
 import argparse
-import os
 import statistics
 from typing import Any
 
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+import gymnasium as gym
+import torch as th
+from stable_baselines3 import PPO
+from stable_baselines3.common.env_util import make_vec_env
 
-import gymnasium as gym  # noqa: E402
-import torch as th  # noqa: E402
-from stable_baselines3 import PPO  # noqa: E402
-from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
-
-import robocup_dribble  # noqa: E402
-from benchmarks.speed.timing import load_average, steps_per_second  # noqa: E402
-from sb3_aac import FlattenParameterizedAction, HybridPPO  # noqa: E402
-from sb3_aac.cli import register_toy_env  # noqa: E402
+import robocup_dribble
+from benchmarks.speed.timing import load_average, steps_per_second
+from sb3_aac import FlattenParameterizedAction, HybridPPO
+from sb3_aac.common.envs import register_toy_env
 
 ROLLOUT = dict(n_steps=256, batch_size=256, n_epochs=10)
 SHARED_ACTORS = dict(net_arch=dict(shared=[64, 64], type=[], params=[], vf=[64, 64]))

@@ -19,17 +19,17 @@ from typing import Any
 from sb3_aac.cli.arguments import CliError, add_trust_argument, seed_int
 from sb3_aac.cli.bench import add_bench_command
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
-from sb3_aac.common.envs import register_toy_env
+from sb3_aac.common.algorithms import SettingsError
+from sb3_aac.version import __version__
 from sb3_aac.cli.evaluate import add_evaluate_commands
 from sb3_aac.cli.export import add_c_header_command, add_export_command
-from sb3_aac.cli.models import hyperparameters
 from sb3_aac.cli.pitch import add_pitch_command
 from sb3_aac.cli.push import add_push_command
 from sb3_aac.cli.render import add_render_command
 from sb3_aac.cli.train import add_train_command
 from sb3_aac.cli.tune import add_tune_command
 
-__all__ = ["CliError", "build_parser", "hyperparameters", "main", "register_toy_env"]
+__all__ = ["CliError", "build_parser", "main"]
 
 EPILOG = """\
 examples:
@@ -57,8 +57,6 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    from sb3_aac import __version__
-
     parser.add_argument("--version", action="version", version=f"sb3-aac {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
@@ -104,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with terminate_as_interrupt():
             args.func(args)
-    except (CliError, OSError) as error:  # OSError: a file the user named failed in a way no check foresaw
+    except (CliError, SettingsError, OSError) as error:  # OSError: a file the user named failed in a way no check foresaw
         message = " ".join(str(error).split())  # one line, whatever the error's text holds
         print(f"sb3-aac {args.command}: error: {message}", file=sys.stderr)
         raise SystemExit(2) from None

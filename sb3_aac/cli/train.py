@@ -13,7 +13,6 @@ from sb3_aac.cli.arguments import (
     CliError,
     episode_count,
     episode_count_or_zero,
-    key_value,
     lane_count,
     output_dir,
     seed_int,
@@ -27,8 +26,8 @@ from sb3_aac.cli.envs import (
     make_train_env,
     max_episode_length,
 )
-from sb3_aac.cli.models import ALGOS, POLICIES, algo_key, algorithm, hyperparameters
 from sb3_aac.cli.reports import print_dribble_report
+from sb3_aac.common.algorithms import ALGOS, POLICIES, algo_key, algorithm, hyperparameters, key_value
 from sb3_aac.common.output_files import RunFolder
 
 DEFAULT_TIMESTEPS = 100_000
