@@ -40,7 +40,6 @@ from sb3_aac.common.envs import NavigationEnv
 
 ENV_IDS = {"platform": PLATFORM_ID, "paper": "RoboCupDribblePaper-v0", "v19": "RoboCupDribble-v0", "nav": "sb3_aac/Navigation"}
 DEFAULT_STEPS = {"platform": 100_000, "paper": 50_000, "v19": 50_000, "nav": 100_000}
-NAV_EPISODES_PER_LANE = 10
 
 
 def hppo_env(env_id: str, n_envs: int, seed: int) -> VecEnv:

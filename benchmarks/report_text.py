@@ -70,10 +70,6 @@ def reach_marks(env_id: str) -> tuple[float, float]:
     return REACH_MARKS["dribbling" if domains.is_dribbling(env_id) else env_id]
 
 
-def fmt_score(env_id: str, value: float) -> str:
-    return f"{value:.1f} m" if domains.is_dribbling(env_id) else f"{value:.3f}"
-
-
 def md_table(header: list[str], rows: list[list[str]], align: str | None = None) -> str:
     align = align or "l" + "r" * (len(header) - 1)
     sep = ["---:" if a == "r" else "---" for a in align]
