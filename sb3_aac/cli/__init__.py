@@ -1,5 +1,5 @@
 """
-The ``sb3-aac`` command line: train SarsaAAC, measure it, watch it, export it.
+The ``sb3-aac`` command line: train SarsaAAC, P-DQN, MP-DQN or HybridPPO, measure, watch and export the result.
 
 Run ``sb3-aac --help`` (or ``python -m sb3_aac.cli --help``) for the subcommands and examples. Errors print one line
 saying what to do and exit with status 2, without a traceback. Each command is a module of this package with its
@@ -34,7 +34,8 @@ __all__ = ["CliError", "build_parser", "main"]
 EPILOG = """\
 examples:
   sb3-aac train --env RoboCupDribblePaper-v0 --policy RbfPolicy --episodes 3000 --n-envs 16 --seed 0 --out runs/rbf
-  sb3-aac train --timesteps 200000 --set n_rbf=30 --set gamma=0.95 --tensorboard runs/tb --progress-bar
+  sb3-aac train --timesteps 200000 --set gamma=0.95 --tensorboard runs/tb --progress-bar   # TilePolicy, the default
+  sb3-aac train --algo mpdqn --env RoboCupDribblePaper-v0 --timesteps 200000 --out runs/mpdqn
   sb3-aac evaluate runs/rbf/model.zip --episodes 1000
   sb3-aac evaluate dribbler --profile v11           # the hand-coded dribbler, for comparison
   sb3-aac reliability runs/rbf/model.zip --out runs/rbf/reliability.png
@@ -45,15 +46,16 @@ examples:
   sb3-aac pitch runs/tile/model.zip --server PATH/rcssserver --episodes 1000   # a real rcssserver 19 against the env
   sb3-aac bench
 
-MODEL is a SarsaAAC model saved by train (model.zip), a policy exported by export (.aacp), or the word
-"dribbler" for the hand-coded dribbler (robocup_dribble.dribbler.HandCodedDribbler).
+MODEL is a model saved by train (model.zip: SarsaAAC, P-DQN, MP-DQN or HybridPPO), a policy exported by export
+(.aacp), or the word "dribbler" for the hand-coded dribbler (robocup_dribble.dribbler.HandCodedDribbler).
 """
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="sb3-aac",
-        description="Train, evaluate, watch and export SARSA Actor-Actor-Critic (SarsaAAC) agents, e.g. RoboCup dribblers.",
+        description="Train, evaluate, watch and export parameterized-action agents (SarsaAAC, P-DQN, MP-DQN, HybridPPO), "
+        "e.g. RoboCup dribblers.",
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
