@@ -452,7 +452,39 @@ FULL: dict[str, Any] = {
     "final_episodes": 1000,
 }
 
-PRESETS = {"quick": QUICK, "full": FULL}
+# The studies of one algorithm family, each a preset of the same runner (its report is the grid's, from its cells):
+# P-DQN and MP-DQN with the reference settings (hyperparams/pdqn.yml, mpdqn.yml; docs/pdqn.md), and HybridPPO against
+# PPO through FlattenParameterizedAction at equal env steps and lanes (hyperparams/hppo.yml; docs/hppo.md).
+PDQN_STUDY: dict[str, Any] = {
+    "envs": {
+        "RoboCupDribblePaper-v0": {
+            "budget": 150_000,
+            "runs": _runs(FEW_SEEDS, "PDQN", "MPDQN"),
+            "long": {"budget": 1_000_000, "runs": _runs(FEW_SEEDS, "MPDQN")},
+        },
+        PLATFORM_ID: {"budget": 100_000, "runs": _runs(FEW_SEEDS, "PDQN", "MPDQN"), **_EPISODIC_SIZES},
+        "Goal-v0": {"budget": 100_000, "runs": _runs(FEW_SEEDS, "PDQN", "MPDQN"), **_EPISODIC_SIZES},
+    },
+    "eval_every": 500,
+    "eval_episodes": 100,
+    "final_episodes": 1000,
+}
+HPPO_STUDY: dict[str, Any] = {
+    "envs": {
+        "RoboCupDribblePaper-v0": {
+            "budget": 50_000,
+            "runs": _runs(PAPER_SEEDS, "HybridPPO", "PPO"),
+            "long": {"budget": 1_000_000, "runs": _runs(PAPER_SEEDS, "HybridPPO", "PPO")},
+        },
+        "RoboCupDribble-v0": {"budget": 50_000, "runs": _runs(PAPER_SEEDS, "HybridPPO", "PPO")},
+        PLATFORM_ID: {"budget": 100_000, "runs": _runs(PAPER_SEEDS, "HybridPPO", "PPO"), **_EPISODIC_SIZES},
+    },
+    "eval_every": 500,
+    "eval_episodes": 100,
+    "final_episodes": 1000,
+}
+
+PRESETS = {"quick": QUICK, "full": FULL, "pdqn": PDQN_STUDY, "hppo": HPPO_STUDY}
 
 
 def build_cells(preset: str | dict[str, Any]) -> list[Cell]:

@@ -1,5 +1,5 @@
 """The reference MP-DQN code's initial action-parameter policy on Goal-v0, beside the yml settings (the grid's MP-DQN
-on Goal-v0 and ``benchmarks.pdqn_platform --reference-init``).
+on Goal-v0).
 
 cycraig/MP-DQN (``run_goal_pdqn.py``, ``initialise_params=True``) starts the parameter actor at a fixed linear function
 of the scaled observation (``set_action_parameter_passthrough_weights``: a frozen "passthrough" layer added to the
