@@ -23,13 +23,12 @@ from benchmarks import cells, domains
 from benchmarks.cells import atomic_write_json, atomic_write_text, cell_lock, remove_stale_temporaries, save_model_atomic
 from benchmarks.cost import cell_seconds
 from benchmarks.engines import CellEngine
-from benchmarks.evaluation import EvalCallback, predict_microseconds
+from benchmarks.evaluation import EvalCallback, TrainingTimeLimit, predict_microseconds
 from benchmarks.models import build_model, peer_settings, peer_settings_source
-from benchmarks.platform_info import loadavg, machine, versions
+
 from benchmarks.presets import BASELINES, EVAL_SEED, FINAL_SEED, PEERS, SARSA_CONFIGS, SARSA_N_ENVS, Cell, is_tuned
-from benchmarks.provenance import cell_provenance
+from benchmarks.provenance import cell_provenance, loadavg, machine, versions
 from benchmarks.tuned import TUNED_PARAMS, TUNING_RECORD, tuned_cell
-from benchmarks.wall_clock import TrainingTimeLimit
 from benchmarks.workers import run_in_pool
 from sb3_aac.common.episode_stats import EpisodeKeywordsCallback
 

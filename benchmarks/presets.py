@@ -100,7 +100,7 @@ REPLAY_RATIO_ONE = {"train_freq": 1, "gradient_steps": OFF_POLICY_ENVS}
 # 256, and a type-entropy bonus of 0.01), so its Platform entry is the rule for the envs it does not list. On an
 # episodic domain with its own entry a peer trains on that entry's env_wrapper chain, as rl-zoo3 does (the same
 # observations as the domain's evaluation env; on Goal the reference's reward scale of 1/50), and on the ids of
-# "reference_start" it starts its parameter actor at the reference MP-DQN code's function (benchmarks.reference_init):
+# "reference_start" it starts its parameter actor at the reference MP-DQN code's function (benchmarks.models):
 # with the yml's constant start MP-DQN never scored on Goal (P(goal) 0.0 after 60k steps, 0.684 with the reference's;
 # docs/pdqn.md).
 PEERS: dict[str, dict[str, Any]] = {

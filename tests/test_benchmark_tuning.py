@@ -1,5 +1,5 @@
 """The benchmark's tuning stage (benchmarks/tuning.py), tuned configs (benchmarks/tuned.py), the equal wall-clock
-budget (benchmarks/wall_clock.py) and the report's sections on them (benchmarks/report_budgets.py)."""
+budget (benchmarks/evaluation.py's TrainingTimeLimit) and the report's sections on them (benchmarks/report_budgets.py)."""
 
 from __future__ import annotations
 

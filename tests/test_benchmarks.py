@@ -492,7 +492,7 @@ def test_the_peers_take_their_yml_entry_or_the_stated_fallback():
     """MP-DQN on Goal: the reference settings, env (features, reward scale) and start; HybridPPO on Moving: hppo.yml's
     Platform entry (the rule of all its entries) on the domain's env; MP-DQN on Moving: its defaults."""
     from benchmarks.models import build_model
-    from benchmarks.reference_init import PassthroughPolicy
+    from benchmarks.models import PassthroughPolicy
     from hybrid_domains.reference_inputs import ScaleReward
 
     goal, _, _ = build_model(Cell("Goal-v0", "MPDQN", "mpdqn", 0, 1000))
