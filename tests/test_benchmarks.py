@@ -534,6 +534,7 @@ def test_the_quick_preset_runs_and_reports(tmp_path):
     assert bench_report.main([str(out)]) == 0
     text = (out / "report.md").read_text()
     assert "TilePolicy (recommended)" in text and "PPO" in text and "hand-coded" in text
+    assert str(tmp_path) not in text, "the report names no path of the machine that made it"
     assert (out / "fig_best.png").stat().st_size > 10_000
 
 
@@ -605,3 +606,15 @@ def test_runner_gives_up_on_an_address_where_no_ray_cluster_listens(tmp_path, ca
     assert time.monotonic() - start < 30
     err = capsys.readouterr().err
     assert f"no Ray cluster answers at 127.0.0.1:{port}" in err and "ray start --head" in err
+
+
+def test_the_report_shows_commands_without_their_out_directory():
+    from benchmarks.report_text import portable_command
+
+    assert portable_command("python -m benchmarks.run --preset full --out /work/x --workers 2") == (
+        "python -m benchmarks.run --preset full --out DIR --workers 2"
+    )
+    assert (
+        portable_command("python -m benchmarks.run --out=/tmp/y --only 'a,b'")
+        == "python -m benchmarks.run --out=DIR --only a,b"
+    )
