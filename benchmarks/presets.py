@@ -313,8 +313,8 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 # full: the regeneration, sized to about 5 core-hours on the development machine (4.2 measured on 2026-12-02;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 250-600 env steps/s on
-# one core (MP-DQN 4 ms a step, TD3 1.8), 30-100x slower than SarsaAAC, so 10 seeds of them at a 50k budget cost what
-# all of SarsaAAC's cells together cost. Hence, per env:
+# one core (MP-DQN 4 ms a step, TD3 1.8), many times slower than SarsaAAC (the report's "Training cost" line), so 10
+# seeds of them at a 50k budget cost what all of SarsaAAC's cells together cost. Hence, per env:
 #
 # * ``runs``: the headline learners with HEADLINE_SEEDS, the others with FEW_SEEDS (the costly defaults of a learner
 #   whose tuned twin is the headline row, with PAPER_SEEDS).
