@@ -182,7 +182,7 @@ class RayEngine:
 
     def _run(self, cells: Sequence[Cell], out: Path, record: Record, run_cell: CellRunner) -> None:
         import ray  # optional (sb3-aac[distributed]): imported only when a Ray engine runs
-        from ray.exceptions import RayError
+        from ray.exceptions import RayError  # optional, with ray above
 
         environ = {k: v for k, v in os.environ.items() if k.startswith(FORWARDED_ENV_PREFIX)}
         task = ray.remote(run_cell_in_scratch).options(

@@ -19,6 +19,7 @@ import time
 from typing import Any
 
 import numpy as np
+from robocup_dribble import ENV_PROFILES, DribbleVecEnv
 from stable_baselines3.common.callbacks import BaseCallback
 
 from benchmarks import domains
@@ -30,8 +31,6 @@ PREDICT_CALLS = 300  # single-observation predict calls timed per cell (the medi
 def evaluation_observations(env_id: str, count: int) -> list[np.ndarray]:
     """``count`` first observations of the final evaluation set's episodes."""
     if domains.is_dribbling(env_id):
-        from robocup_dribble import ENV_PROFILES, DribbleVecEnv
-
         env = DribbleVecEnv(count, profile=ENV_PROFILES[env_id])
         env.seed(FINAL_SEED)
         return list(env.reset())

@@ -60,16 +60,20 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import torch as th
+from robocup_dribble import DribbleVecEnv
+from robocup_dribble.dribbler import HandCodedDribbler
+from robocup_dribble.evaluation import evaluate_dribbling
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import VecEnv
 
 from benchmarks import adapters, domains
 from benchmarks.groups import scalar_ci
-from benchmarks.significance import target_verdict
 from benchmarks.presets import EVAL_SEED, FINAL_SEED
+from benchmarks.significance import target_verdict
 from sb3_aac import SarsaAAC, SelectObservation
 from sb3_aac.common.checkpoints import GreedyCheckpoints
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
@@ -87,8 +91,6 @@ POLICIES: dict[str, tuple[str, dict[str, Any]]] = {
 
 def dribble_env(profile: str) -> Callable[[int, int], VecEnv]:
     def make(n_envs: int, seed: int) -> VecEnv:
-        from robocup_dribble import DribbleVecEnv
-
         env = DribbleVecEnv(n_envs, profile=profile)
         env.seed(seed)
         return env
@@ -106,8 +108,6 @@ Score = Callable[[Any, bool], float]  # (model, quick) -> greedy score; quick: f
 
 def dribble_score(profile: str) -> Score:
     def score(model: SarsaAAC, quick: bool) -> float:
-        from robocup_dribble.evaluation import evaluate_dribbling
-
         report = evaluate_dribbling(
             model, n_episodes=200 if quick else 1000, profile=profile, seed=EVAL_SEED if quick else FINAL_SEED
         )
@@ -117,7 +117,6 @@ def dribble_score(profile: str) -> Score:
 
 
 def platform_env(n_envs: int, seed: int) -> VecEnv:
-    import gymnasium as gym
     import gym_platform  # noqa: F401  (registers Platform-v0)
 
     return make_vec_env(lambda: SelectObservation(gym.make("Platform-v0"), 0), n_envs=n_envs, seed=seed)
@@ -259,8 +258,6 @@ class TargetWatch(GreedyCheckpoints):
 
 def dribbler_score(task: str) -> float:
     """The hand-coded dribbler's score on the final evaluation's episodes of a dribbling task."""
-    from robocup_dribble.dribbler import HandCodedDribbler
-
     profile = "v19" if task == "v19" else "v11"
     return TASKS[task][4](HandCodedDribbler(profile=profile), False)  # type: ignore[arg-type]
 

@@ -51,14 +51,16 @@ import gymnasium as gym
 import numpy as np
 import optuna
 import torch as th
+from hybrid_domains.baselines import scripted_policy
 from optuna.trial import FrozenTrial, TrialState
+from robocup_dribble import ENV_PROFILES, DribbleEnv
+from robocup_dribble.dribbler import HandCodedDribbler
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import VecEnv
 
 from benchmarks import domains
 from benchmarks.presets import FINAL_SEED
 from benchmarks.tuning import TUNE_EVAL_SEED, TUNE_SEED
-from robocup_dribble import ENV_PROFILES
 from sb3_aac import SarsaAAC
 from sb3_aac.common.algorithms import hyperparameters, key_value
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
@@ -165,8 +167,6 @@ def floor_policy(env_id: str, seed: int) -> RandomActions:
     if env_id in _LOCAL_ENVS:
         space = _LOCAL_ENVS[env_id][0]().action_space
     elif domains.is_dribbling(env_id):
-        from robocup_dribble import DribbleEnv
-
         space = DribbleEnv(profile=ENV_PROFILES[env_id]).action_space
     else:
         space = domains.episodic_env(env_id).action_space
@@ -184,12 +184,8 @@ def reference_score(env_id: str, n_episodes: int, seed: int) -> float:
     (Moving-v0, CatchPoint-v0), else the metric's maximum (Platform-v0's return 1 reaches the goal, a success share of
     1, the toy env's optimum return)."""
     if domains.is_dribbling(env_id):
-        from robocup_dribble.dribbler import HandCodedDribbler
-
         return greedy_score(env_id, HandCodedDribbler(profile=ENV_PROFILES[env_id]), n_episodes, seed)
     if env_id in ("Moving-v0", "CatchPoint-v0"):
-        from hybrid_domains.baselines import scripted_policy
-
         return greedy_score(env_id, ScriptedActions(scripted_policy(env_id)), n_episodes, seed)
     if env_id == domains.PLATFORM_ID:
         return domains.PLATFORM_SUCCESS_RETURN
