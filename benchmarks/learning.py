@@ -1,10 +1,10 @@
 """
 Learning targets of SarsaAAC: train each (task, policy) on several seeds and print the greedy score.
 
-    PYTHONPATH=.:envs python -m benchmarks.learning --seeds 3
-    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-mlp2,nav-tile --seeds 5
-    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
-    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-tile --seeds 5 --steps 80000 --eval-every 5000
+    python -m benchmarks.learning --seeds 3
+    python -m benchmarks.learning --only paper-mlp2,nav-tile --seeds 5
+    python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
+    python -m benchmarks.learning --only paper-tile --seeds 5 --steps 80000 --eval-every 5000
 
 The first targets, one pair at a time (a full run is long), each with ``--seeds 5 --eval-every 10000``:
 ``paper-tile`` (25 m within 5,000 episodes; metres at the budget), ``v19-tile`` (25.4 m), ``paper-mlp2`` and
@@ -329,12 +329,12 @@ SarsaAAC is a (task, policy) pair of this module (:func:`build`), one lane unles
 ``EVAL_SEED``, the same episodes for every learner) and once more at the end (500 episodes of ``FINAL_SEED``). Each
 seed's curve is appended to ``--out`` as one JSON line, so learners and seeds can run in separate processes::
 
-    PYTHONPATH=.:envs python -m benchmarks.learning efficiency train --task moving --learner td3 --seeds 3
-    PYTHONPATH=.:envs python -m benchmarks.learning efficiency train --task moving --learner tile --seeds 3
-    PYTHONPATH=.:envs python -m benchmarks.learning efficiency train --task moving --learner deep --seeds 3 \
+    python -m benchmarks.learning efficiency train --task moving --learner td3 --seeds 3
+    python -m benchmarks.learning efficiency train --task moving --learner tile --seeds 3
+    python -m benchmarks.learning efficiency train --task moving --learner deep --seeds 3 \
         --set trace_lambda=0.8
-    PYTHONPATH=.:envs python -m benchmarks.learning efficiency train --task moving --learner tile --seeds 3 --n-envs 16
-    PYTHONPATH=.:envs python -m benchmarks.learning efficiency compare
+    python -m benchmarks.learning efficiency train --task moving --learner tile --seeds 3 --n-envs 16
+    python -m benchmarks.learning efficiency compare
 
 (``--task catch`` likewise; ``--first-seed`` runs one seed per process.) ``compare`` reads the curves. TD3's reference
 step ``S`` is the first checkpoint at which its seeds' mean curve reaches 90 % of their mean final score; a learner's
