@@ -19,7 +19,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from benchmarks.presets import PRESETS, Cell, training_rate
+from benchmarks.presets import PRESETS, Cell, build_cells, select, training_rate
+from benchmarks.tuning import plan_studies
 
 # Training env steps per episode, typical of the learners at the grid's budgets (the number of curve points);
 # dribbling and Platform from the finished cells of benchmarks/results, the others from the envs' random and
@@ -88,9 +89,6 @@ def estimate(preset: str | dict[str, Any], only: str | None = None) -> dict[str,
     """Per stage (:data:`STAGES`) and env id: ``{"runs": cells or trials, "hours": core-hours}`` of a preset's cells
     and its tuning stage at the preset's size (``only``: the cells and studies matching those patterns, as the
     runner's ``--only``)."""
-    from benchmarks.presets import build_cells, select
-    from benchmarks.tuning import plan_studies
-
     p = PRESETS[preset] if isinstance(preset, str) else preset
     table: dict[str, dict[str, float]] = {}
 

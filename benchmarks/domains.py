@@ -21,11 +21,13 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from hybrid_domains.reference_inputs import GoalFeatures
+from robocup_dribble import ENV_PROFILES, DribbleVecEnv
+from robocup_dribble.evaluation import evaluate_dribbling
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import VecEnv
 
 from benchmarks.presets import HYBRID_IDS, PLATFORM_ID
-from robocup_dribble import ENV_PROFILES
 from sb3_aac import SelectObservation
 
 REACH_METRES = 20.0  # the paper's "at least around 20 meters with high reliability" (section 4.1)
@@ -71,8 +73,6 @@ def _hybrid(env_id: str) -> Callable[[], gym.Env]:
 
         env = gym.make(env_id)
         if env_id == "Goal-v0":  # the reference MP-DQN code's 17 inputs (the state and 3 keeper features)
-            from hybrid_domains.reference_inputs import GoalFeatures
-
             return GoalFeatures(env)
         return env
 
@@ -144,8 +144,6 @@ def train_env(env_id: str, n_envs: int, seed: int, wrapper: Callable[[gym.Env], 
     """The training VecEnv of a cell that acts in the env's own parameterized action space (``wrapper`` None) or
     through an action wrapper. Dribbling: ``DribbleVecEnv`` lanes (wrapped ones: :mod:`benchmarks.adapters`)."""
     if is_dribbling(env_id):
-        from robocup_dribble import DribbleVecEnv
-
         if wrapper is not None:
             raise ValueError("dribbling baselines train on benchmarks.adapters.baseline_env (batched wrappers)")
         env = DribbleVecEnv(n_envs, profile=ENV_PROFILES[env_id])
@@ -192,8 +190,6 @@ def evaluate(env_id: str, policy: Any, n_episodes: int, seed: int) -> dict[str, 
     """Greedy score of ``policy`` (anything with SB3's ``predict``) on episode slots ``0..n_episodes-1`` of set
     ``seed`` of ``env_id``: :func:`summarize`'s summary."""
     if is_dribbling(env_id):
-        from robocup_dribble.evaluation import evaluate_dribbling
-
         report = evaluate_dribbling(policy, n_episodes, ENV_PROFILES[env_id], seed)
         return summarize(env_id, report.distances, report.ball_lost)
     return summarize(env_id, *episodic_returns(env_id, policy, n_episodes, seed))

@@ -1,7 +1,7 @@
 """Engines that run a grid's cells somewhere else than the driver's own process pool: Ray.
 
-:func:`benchmarks.execution.run_grid` hands the cells still to run to an engine (a
-:class:`benchmarks.execution.CellEngine`: ``engine.run(cells, out, record)``);
+:func:`benchmarks.execution.run_grid` hands the cells still to run to an engine (a :class:`CellEngine`:
+``engine.run(cells, out, record, run_cell)``, ``run_cell`` the runner's :func:`benchmarks.execution.run_cell_safely`);
 without one it uses its local process pool (the default for one machine). An engine calls ``record(cell_id,
 state, payload)`` once per cell, as the local pool does: ``state`` is ``"done"`` (``payload`` the cell's result
 dict) or ``"failed"`` (``payload`` the error text).
@@ -28,19 +28,32 @@ import re
 import shutil
 import socket
 import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from benchmarks.presets import Cell
 from benchmarks.process_reaper import ProcessReaper
+from benchmarks.workers import worker_env
+from sb3_aac.common.output_files import replaced_atomically
 
-if TYPE_CHECKING:
-    from benchmarks.execution import Record
+# How an engine reports a cell to run_grid: ``record(cell_id, state, payload)``, ``state`` "done" (payload the
+# cell's result dict) or "failed" (payload the error text).
+Record = Callable[[str, str, Any], None]
+# How a cell is run, in whatever process: ``run_cell(cell_data, out)`` -> ``(cell_id, state, payload)``
+# (:func:`benchmarks.execution.run_cell_safely`).
+CellRunner = Callable[[dict[str, Any], str], tuple[str, str, Any]]
 
-# Set in every Ray worker process before it starts (numpy and torch read them at import): one BLAS/OpenMP thread
-# per cell, as the local pool does (benchmarks/execution.py explains why).
-WORKER_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+class CellEngine(Protocol):
+    """Runs cells somewhere else than run_grid's local pool (:class:`RayEngine`), each with ``run_cell``, and reports
+    each one through ``record``."""
+
+    name: str
+
+    def run(self, cells: Sequence[Cell], out: Path, record: Record, run_cell: CellRunner) -> None: ...
+
+
 # How long the driver waits for a Ray cluster named by --address to accept a connection before giving up.
 CONNECT_TIMEOUT_S = 10.0
 # host:port of a cluster's GCS, or ray://host:port of its client server ("auto" is looked up by Ray itself).
@@ -49,24 +62,24 @@ _ADDRESS = re.compile(r"^(?:ray://)?(?P<host>\[[^\]]+\]|[^:/\[\]]+):(?P<port>\d{
 FORWARDED_ENV_PREFIX = "SB3_AAC_BENCH_"
 
 
-def run_cell_in_scratch(cell_data: dict[str, Any], environ: dict[str, str], scratch_root: str | None = None) -> dict[str, Any]:
-    """Run one cell in a fresh scratch directory (under ``scratch_root``, default the system's temporary directory)
-    on this machine; return its outcome and the files it wrote. An attempt killed with its node leaves its scratch
-    directory behind on that node.
+def run_cell_in_scratch(
+    run_cell: CellRunner, cell_data: dict[str, Any], environ: dict[str, str], scratch_root: str | None = None
+) -> dict[str, Any]:
+    """Run one cell with ``run_cell`` in a fresh scratch directory (under ``scratch_root``, default the system's
+    temporary directory) on this machine; return its outcome and the files it wrote. An attempt killed with its node
+    leaves its scratch directory behind on that node.
 
     :return: ``cell_id``, ``state`` and ``payload`` (as :func:`benchmarks.execution.run_cell_safely`), ``files`` (path
         relative to the results directory -> bytes) and ``node`` (the Ray node id, if in a Ray worker)
     """
-    from benchmarks.execution import run_cell_safely
-
     os.environ.update(environ)
     with tempfile.TemporaryDirectory(prefix="sb3-aac-cell-", dir=scratch_root) as scratch:
-        cell_id, state, payload = run_cell_safely(cell_data, scratch)
+        cell_id, state, payload = run_cell(cell_data, scratch)
         root = Path(scratch)
         files = {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
     node = None
     with contextlib.suppress(Exception):
-        import ray
+        import ray  # optional (sb3-aac[distributed]): imported only when a Ray engine runs
 
         node = ray.get_runtime_context().get_node_id()
     return {"cell_id": cell_id, "state": state, "payload": payload, "files": files, "node": node}
@@ -78,8 +91,6 @@ def write_cell_files(out: Path, cell_id: str, files: dict[str, bytes]) -> None:
     The cell's old TensorBoard directory goes first (a run interrupted before its cell file leaves one behind), and
     its error file once the cell has finished.
     """
-    from sb3_aac.common.output_files import replaced_atomically
-
     cell_file = f"cells/{cell_id}.json"
     unexpected = [name for name in files if Path(name).is_absolute() or ".." in Path(name).parts]
     if unexpected:
@@ -149,7 +160,7 @@ class RayEngine:
         fate-shares its GCS server and raylet with the driver, and a :class:`~benchmarks.process_reaper.ProcessReaper`
         ends the rest (the raylet's agents) if the driver is killed.
         """
-        import ray
+        import ray  # optional (sb3-aac[distributed]): imported only when a Ray engine runs
 
         if ray.is_initialized():
             yield
@@ -165,22 +176,22 @@ class RayEngine:
                 stack.callback(ray.shutdown)
             yield
 
-    def run(self, cells: Sequence[Cell], out: Path, record: Record) -> None:
+    def run(self, cells: Sequence[Cell], out: Path, record: Record, run_cell: CellRunner) -> None:
         with self.connected():
-            self._run(cells, out, record)
+            self._run(cells, out, record, run_cell)
 
-    def _run(self, cells: Sequence[Cell], out: Path, record: Record) -> None:
-        import ray
-        from ray.exceptions import RayError
+    def _run(self, cells: Sequence[Cell], out: Path, record: Record, run_cell: CellRunner) -> None:
+        import ray  # optional (sb3-aac[distributed]): imported only when a Ray engine runs
+        from ray.exceptions import RayError  # optional, with ray above
 
         environ = {k: v for k, v in os.environ.items() if k.startswith(FORWARDED_ENV_PREFIX)}
         task = ray.remote(run_cell_in_scratch).options(
             num_cpus=1,
             max_retries=self.max_retries,
             retry_exceptions=False,  # a cell's own exception is an error file, not a reason to retry
-            runtime_env={"env_vars": {**WORKER_ENV, **_python_path()}},
+            runtime_env={"env_vars": worker_env()},
         )
-        pending = {task.remote(cell.to_dict(), environ, self.scratch_root): cell.cell_id for cell in cells}
+        pending = {task.remote(run_cell, cell.to_dict(), environ, self.scratch_root): cell.cell_id for cell in cells}
         try:
             while pending:
                 finished, _ = ray.wait(list(pending), num_returns=1)
@@ -200,11 +211,3 @@ class RayEngine:
             for ref in pending:
                 with contextlib.suppress(Exception):
                     ray.cancel(ref, force=True)
-
-
-def _python_path() -> dict[str, str]:
-    """The driver's ``PYTHONPATH`` made absolute (the repository checkout when run with ``PYTHONPATH=.:envs``)."""
-    value = os.environ.get("PYTHONPATH")
-    if not value:
-        return {}
-    return {"PYTHONPATH": os.pathsep.join(os.path.abspath(p) for p in value.split(os.pathsep) if p)}

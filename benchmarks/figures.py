@@ -62,10 +62,10 @@ def env_short(env_id: str) -> str:
 
 
 def _plt():
-    import matplotlib
+    import matplotlib  # optional (sb3-aac[plots]); the Agg backend must be chosen before pyplot is imported
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # after the backend (above)
 
     plt.rcParams.update(
         {
@@ -124,7 +124,7 @@ def _axes_style(ax, env_id: str, xlabel: str, ylim: tuple[float, float]) -> None
 
 
 def _thousands():
-    from matplotlib.ticker import FuncFormatter
+    from matplotlib.ticker import FuncFormatter  # optional (sb3-aac[plots]), as in _plt
 
     return FuncFormatter(lambda v, _: f"{v / 1000:g}k" if abs(v) >= 1000 else f"{v:g}")
 

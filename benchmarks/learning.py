@@ -1,10 +1,10 @@
 """
 Learning targets of SarsaAAC: train each (task, policy) on several seeds and print the greedy score.
 
-    PYTHONPATH=.:envs python -m benchmarks.learning --seeds 3
-    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-mlp2,nav-tile --seeds 5
-    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
-    PYTHONPATH=.:envs python -m benchmarks.learning --only paper-tile --seeds 5 --steps 80000 --eval-every 5000
+    python -m benchmarks.learning --seeds 3
+    python -m benchmarks.learning --only paper-mlp2,nav-tile --seeds 5
+    python -m benchmarks.learning --only paper-rbf10 --set gamma=0.95 exploration_fraction=0.3
+    python -m benchmarks.learning --only paper-tile --seeds 5 --steps 80000 --eval-every 5000
 
 The first targets, one pair at a time (a full run is long), each with ``--seeds 5 --eval-every 10000``:
 ``paper-tile`` (25 m within 5,000 episodes; metres at the budget), ``v19-tile`` (25.4 m), ``paper-mlp2`` and
@@ -34,7 +34,7 @@ The learner's targets (lane count, past the hand-coded dribbler), each with ``--
 
 The benchmark's domains with interacting inputs, ``moving``, ``sliding`` and ``catch`` (Moving-v0, Sliding-v0,
 CatchPoint-v0 as :mod:`benchmarks.domains` builds them; one lane), are compared with TD3 at equal env steps by
-:mod:`benchmarks.sample_efficiency`, which trains on these tasks; alone, e.g.
+``python -m benchmarks.learning efficiency`` (:data:`EFFICIENCY_DOC`); alone, e.g.
 ``--only moving-tile,catch-deep --set trace_lambda=0.8``.
 
 Half Field Offense 1v0 (``hfo``: ``HalfFieldOffenseVecEnv``, 16 lanes; P(goal) over 1,000 greedy trials), the target
@@ -57,28 +57,31 @@ from __future__ import annotations
 
 import argparse
 import ast
-import os
+import json
+import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Any
 
-# One BLAS thread: on a busy two-core machine OpenBLAS's own threads made SarsaAAC's small matrix products up to 70x
-# slower (256 lanes, RbfPolicy: 15 ms instead of 0.2 ms per forward pass). Set before numpy is imported.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+import gymnasium as gym
+import numpy as np
+import torch as th
+from robocup_dribble import DribbleVecEnv
+from robocup_dribble.dribbler import HandCodedDribbler
+from robocup_dribble.evaluation import evaluate_dribbling
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.evaluation import evaluate_policy
+from stable_baselines3.common.vec_env import VecEnv
 
-import numpy as np  # noqa: E402
-import torch as th  # noqa: E402
-from scipy import stats  # noqa: E402
-from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
-from stable_baselines3.common.evaluation import evaluate_policy  # noqa: E402
-from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
-
-from benchmarks import domains  # noqa: E402
-from benchmarks.presets import EVAL_SEED, FINAL_SEED  # noqa: E402
-from sb3_aac import SarsaAAC, SelectObservation  # noqa: E402
-from sb3_aac.common.checkpoints import GreedyCheckpoints  # noqa: E402
-from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv  # noqa: E402
+from benchmarks import adapters, domains
+from benchmarks.groups import scalar_ci
+from benchmarks.presets import EVAL_SEED, FINAL_SEED
+from benchmarks.significance import target_verdict
+from sb3_aac import SarsaAAC, SelectObservation
+from sb3_aac.common.checkpoints import GreedyCheckpoints
+from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
 
 # name: (policy, policy_kwargs)
 POLICIES: dict[str, tuple[str, dict[str, Any]]] = {
@@ -93,8 +96,6 @@ POLICIES: dict[str, tuple[str, dict[str, Any]]] = {
 
 def dribble_env(profile: str) -> Callable[[int, int], VecEnv]:
     def make(n_envs: int, seed: int) -> VecEnv:
-        from robocup_dribble import DribbleVecEnv
-
         env = DribbleVecEnv(n_envs, profile=profile)
         env.seed(seed)
         return env
@@ -112,8 +113,6 @@ Score = Callable[[Any, bool], float]  # (model, quick) -> greedy score; quick: f
 
 def dribble_score(profile: str) -> Score:
     def score(model: SarsaAAC, quick: bool) -> float:
-        from robocup_dribble.evaluation import evaluate_dribbling
-
         report = evaluate_dribbling(
             model, n_episodes=200 if quick else 1000, profile=profile, seed=EVAL_SEED if quick else FINAL_SEED
         )
@@ -123,7 +122,6 @@ def dribble_score(profile: str) -> Score:
 
 
 def platform_env(n_envs: int, seed: int) -> VecEnv:
-    import gymnasium as gym
     import gym_platform  # noqa: F401  (registers Platform-v0)
 
     return make_vec_env(lambda: SelectObservation(gym.make("Platform-v0"), 0), n_envs=n_envs, seed=seed)
@@ -259,7 +257,7 @@ DOMAIN_TASKS = {
 
 
 # The greedy score each task's target asks for; the paper's MLP policies are asked for 16 m.
-# The domains' targets are relative to TD3 (benchmarks.sample_efficiency); 0.9 is HyAR-TD3's CatchPoint success.
+# The domains' targets are relative to TD3 (efficiency_main); 0.9 is HyAR-TD3's CatchPoint success.
 # 0.79 is MP-DQN's published P(goal) on Goal-v0 (0.789).
 TARGETS = {
     **{"paper": 25.0, "paperid": 25.0, "v19": 25.4, "platform": 0.98, "nav": 0.9, "nav1": 0.9, "toy": 9.0},
@@ -270,18 +268,6 @@ MLP_PAPER_TARGET = 16.0
 
 def target(task: str, policy_name: str) -> float:
     return MLP_PAPER_TARGET if task.startswith("paper") and policy_name in ("mlp2", "rbfmlp2") else TARGETS[task]
-
-
-def iqm(values: list[float]) -> float:
-    return float(stats.trim_mean(values, 0.25))
-
-
-def iqm_ci(values: list[float], resamples: int = 10_000) -> tuple[float, float]:
-    """95 % percentile-bootstrap interval of the IQM over seeds."""
-    rng = np.random.default_rng(0)
-    samples = np.asarray(values)[rng.integers(len(values), size=(resamples, len(values)))]
-    boot = stats.trim_mean(samples, 0.25, axis=1)
-    return float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))
 
 
 class TargetWatch(GreedyCheckpoints):
@@ -300,15 +286,8 @@ class TargetWatch(GreedyCheckpoints):
 
 def dribbler_score(task: str) -> float:
     """The hand-coded dribbler's score on the final evaluation's episodes of a dribbling task."""
-    from robocup_dribble.dribbler import HandCodedDribbler
-
     profile = "v19" if task == "v19" else "v11"
     return TASKS[task][4](HandCodedDribbler(profile=profile), False)  # type: ignore[arg-type]
-
-
-def above(scores: list[float], reference: float) -> float:
-    """One-sided p-value of Student's t-test that the seeds' mean score exceeds ``reference``."""
-    return float(stats.ttest_1samp(scores, reference, alternative="greater").pvalue)
 
 
 def build(
@@ -351,15 +330,15 @@ def run(
         if watch is not None:
             reached.append(watch.reached_at)
     extra = "".join(f" {key}={value}" for key, value in settings.items())
-    low, high = iqm_ci(scores)
+    point, low, high = scalar_ci(np.asarray(scores))
     line = (
         f"{task:9s} {policy_name:8s} lanes={lanes} rate={rate or 'default'}{extra} steps={budget:>7d} "
         f"episodes~{int(np.mean(episodes)):>6d} scores={[round(s, 3) for s in scores]} mean={np.mean(scores):.3f} "
-        f"iqm={iqm(scores):.3f} ci95=[{low:.3f}, {high:.3f}]"
+        f"iqm={point:.3f} ci95=[{low:.3f}, {high:.3f}]"
     )
     if vs_dribbler:
         reference = dribbler_score(task)
-        line += f" dribbler={reference:.3f} p(mean > dribbler)={above(scores, reference):.3g}"
+        line += f" dribbler={reference:.3f} p(mean > dribbler)={target_verdict(scores, reference, min_seeds=2).p_value:.3g}"
     if eval_every:
         line += f" episodes_to_{target(task, policy_name)}={['-' if e is None else e for e in reached]}"
     else:
@@ -367,13 +346,206 @@ def run(
     print(line, flush=True)
 
 
+# ---------------------------------------------------------------- sample efficiency against TD3
+
+EFFICIENCY_DOC = """Sample efficiency on the domains with interacting inputs: SarsaAAC's greedy success against TD3's at the
+env steps TD3 needs to reach 90 % of its final score (target: within 5 points).
+
+TD3 is the grid's (:data:`benchmarks.presets.BASELINES`: SB3's TD3 through ``FlattenParameterizedAction``, 4 lanes,
+one gradient step per transition, 64x64 nets, Gaussian action noise 0.1; :func:`benchmarks.adapters.build_baseline`);
+SarsaAAC is a (task, policy) pair of this module (:func:`build`), one lane unless
+``--n-envs``. Every learner is scored every ``--every`` env steps by the task's greedy success rate (200 episodes of
+``EVAL_SEED``, the same episodes for every learner) and once more at the end (500 episodes of ``FINAL_SEED``). Each
+seed's curve is appended to ``--out`` as one JSON line, so learners and seeds can run in separate processes::
+
+    python -m benchmarks.learning efficiency train --task moving --learner td3 --seeds 3
+    python -m benchmarks.learning efficiency train --task moving --learner tile --seeds 3
+    python -m benchmarks.learning efficiency train --task moving --learner deep --seeds 3 \
+        --set trace_lambda=0.8
+    python -m benchmarks.learning efficiency train --task moving --learner tile --seeds 3 --n-envs 16
+    python -m benchmarks.learning efficiency compare
+
+(``--task catch`` likewise; ``--first-seed`` runs one seed per process.) ``compare`` reads the curves. TD3's reference
+step ``S`` is the first checkpoint at which its seeds' mean curve reaches 90 % of their mean final score; a learner's
+score at ``S`` is its curve at its first checkpoint at or past ``S``. It prints one line per (task, learner): the
+per-seed scores at ``S``, their mean, IQM and the IQM's 95 % bootstrap CI over seeds, the difference of the means to
+TD3's at ``S`` and the verdict (``met`` if the difference is at least -0.05), then the per-seed final scores; TD3's
+line adds each seed's own steps to 90 % of its final score."""
+
+TD3 = "td3"
+REACH_SHARE = 0.9  # TD3's reference step: where it first reaches this share of its final score
+TOLERANCE = 0.05  # the target: within 5 points of TD3's success at that step
+DEFAULT_OUT = Path("benchmarks/results/learning/domain_curves.jsonl")
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One seed's greedy success ``(env steps, score)`` every ``every`` env steps, and its final score."""
+
+    task: str
+    learner: str  # "td3" or a policy name of benchmarks.learning.POLICIES
+    lanes: int
+    seed: int
+    every: int
+    steps: int
+    points: list[tuple[int, float]]
+    final: float
+    seconds: float
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def label(self) -> str:
+        """The learner with its lanes and settings: the seeds of one label form one line of ``compare``."""
+        return f"{self.learner} lanes={self.lanes}" + "".join(f" {key}={value}" for key, value in self.settings.items())
+
+    def score_at(self, steps: int) -> float | None:
+        """The score at the first checkpoint at or past ``steps`` (None if the curve ends before)."""
+        return next((score for at, score in self.points if at >= steps), None)
+
+
+def train(task: str, learner: str, seed: int, steps: int, every: int, n_envs: int | None, settings: dict[str, Any]) -> Curve:
+    """Train one seed of ``learner`` on ``task`` for ``steps`` env steps, scoring it every ``every`` env steps."""
+    score = TASKS[task][4]
+    if learner == TD3:
+        if n_envs is not None or settings:
+            raise ValueError("TD3 keeps the grid's settings (4 lanes): --n-envs and --set are for SarsaAAC")
+        env_id = DOMAIN_TASKS[task]
+        model: Any = adapters.build_baseline(env_id, "TD3", seed)
+        predictor = adapters.adapter_for(model, "TD3", env_id)
+        lanes, kwargs = model.n_envs, {}
+    else:
+        model = build(task, learner, seed, n_envs, None, settings)
+        predictor, lanes, kwargs = model, model.n_envs, {"log_interval": None}
+
+    def checkpoint(_: Any) -> float:
+        value = score(predictor, True)
+        print(f"{task} {learner} seed={seed} steps={model.num_timesteps} score={value:.3f}", flush=True)
+        return value
+
+    watch = GreedyCheckpoints(every, checkpoint)
+    start = time.process_time()
+    model.learn(steps, callback=watch, **kwargs)
+    seconds = time.process_time() - start
+    return Curve(task, learner, lanes, seed, every, steps, watch.curve, score(predictor, False), seconds, settings)
+
+
+def load(path: Path) -> list[Curve]:
+    """The curves of a file written by ``train`` (a later line of the same seed and label replaces an earlier one)."""
+    curves: dict[tuple[str, str, int], Curve] = {}
+    for line in path.read_text().splitlines():
+        record = json.loads(line)
+        curve = Curve(**{**record, "points": [tuple(point) for point in record["points"]]})
+        curves[(curve.task, curve.label, curve.seed)] = curve
+    return list(curves.values())
+
+
+def steps_to_share(points: Sequence[tuple[int, float]], final: float) -> int | None:
+    """The first checkpoint's env steps whose score reaches :data:`REACH_SHARE` of ``final`` (None if none does)."""
+    return next((at for at, score in points if score >= REACH_SHARE * final), None)
+
+
+def reference_step(td3: list[Curve]) -> int | None:
+    """TD3's reference step: where the seeds' mean curve first reaches :data:`REACH_SHARE` of their mean final score
+    (None if it never does)."""
+    length = min(len(curve.points) for curve in td3)
+    checkpoints = [at for at, _ in td3[0].points[:length]]
+    if any([at for at, _ in curve.points[:length]] != checkpoints for curve in td3):
+        raise ValueError(f"TD3's curves of {td3[0].task} need common checkpoints (the same --every and lanes)")
+    mean = np.mean([[score for _, score in curve.points[:length]] for curve in td3], axis=0)
+    return steps_to_share(list(zip(checkpoints, mean.tolist(), strict=True)), float(np.mean([c.final for c in td3])))
+
+
+def figures(values: Sequence[float]) -> str:
+    point, low, high = scalar_ci(np.asarray(values))
+    return f"{[round(v, 3) for v in values]} mean={np.mean(values):.3f} iqm={point:.3f} ci95=[{low:.3f}, {high:.3f}]"
+
+
+def compare(curves: list[Curve]) -> list[str]:
+    """The lines of ``compare``: per task, TD3's first, then every other learner's at TD3's reference step."""
+    lines = []
+    for task in sorted({curve.task for curve in curves}):
+        groups: dict[str, list[Curve]] = {}
+        for curve in sorted(curves, key=lambda c: (c.label, c.seed)):
+            if curve.task == task:
+                groups.setdefault(curve.label, []).append(curve)
+        td3 = next((group for label, group in groups.items() if group[0].learner == TD3), None)
+        if td3 is None:
+            lines.append(f"{task}: no TD3 curves, so no reference step")
+            continue
+        at = reference_step(td3)
+        own = [steps_to_share(curve.points, curve.final) for curve in td3]
+        head = f"{task:7s} {td3[0].label} seeds={[c.seed for c in td3]} steps={td3[0].steps}"
+        head += f" final={figures([c.final for c in td3])} (seeds' own steps to {REACH_SHARE:.0%} of it: {own})"
+        if at is None:
+            lines.append(f"{head}: the seeds' mean curve never reaches {REACH_SHARE:.0%} of their mean final score")
+            continue
+        reference = [score for curve in td3 if (score := curve.score_at(at)) is not None]
+        reference_mean = float(np.mean(reference))
+        lines.append(f"{head} reference_step={at} at_reference={figures(reference)}")
+        for label, group in groups.items():
+            if group is td3:
+                continue
+            head = f"{task:7s} {label} seeds={[c.seed for c in group]} steps={group[0].steps}"
+            scores = [score for curve in group if (score := curve.score_at(at)) is not None]
+            if len(scores) < len(group):
+                lines.append(f"{head} curves end before TD3's reference step {at}")
+                continue
+            difference = float(np.mean(scores)) - reference_mean
+            verdict = "met" if difference >= -TOLERANCE else "missed"
+            lines.append(
+                f"{head} at_reference({at})={figures(scores)} vs TD3 {reference_mean:.3f}: {difference:+.3f} "
+                f"{verdict} (target >= {-TOLERANCE:+.2f}) final={figures([c.final for c in group])}"
+            )
+    return lines
+
+
+def efficiency_main(argv: list[str]) -> None:
+    """``python -m benchmarks.learning efficiency train|compare``: the sample-efficiency comparison with TD3."""
+    parser = argparse.ArgumentParser(
+        prog="benchmarks.learning efficiency", description=EFFICIENCY_DOC, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("train", help="train seeds of one learner and append their curves to --out")
+    run.add_argument("--task", required=True, choices=sorted(DOMAIN_TASKS))
+    run.add_argument("--learner", required=True, choices=[TD3, *POLICIES])
+    run.add_argument("--seeds", type=int, default=3)
+    run.add_argument("--first-seed", type=int, default=0)
+    run.add_argument("--steps", type=int, default=None, help="env steps (default: the task's budget)")
+    run.add_argument("--every", type=int, default=5000, help="env steps between greedy checkpoints")
+    run.add_argument("--n-envs", type=int, default=None, help="SarsaAAC's lanes (default: the task's)")
+    run.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="SarsaAAC keyword arguments")
+    run.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    show = commands.add_parser("compare", help="print the comparison of the curves in --out")
+    show.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    args = parser.parse_args(argv)
+    if args.command == "compare":
+        for line in compare(load(args.out)):
+            print(line, flush=True)
+        return
+    th.set_num_threads(1)
+    settings = {key: ast.literal_eval(value) for key, value in (item.split("=", 1) for item in args.set)}
+    steps = args.steps or TASKS[args.task][2]
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    for seed in range(args.first_seed, args.first_seed + args.seeds):
+        curve = train(args.task, args.learner, seed, steps, args.every, args.n_envs, settings)
+        with args.out.open("a") as out:
+            out.write(json.dumps(asdict(curve)) + "\n")
+        print(f"{curve.task} {curve.label} seed={seed} final={curve.final:.3f} cpu={curve.seconds:.0f}s", flush=True)
+
+
+# ---------------------------------------------------------------- the command line
+
 DEFAULT_RUNS = (
     "paper-mlp2,paper-rbfmlp2,paper-rbf10,paper-tile,v19-rbf10,v19-tile,platform-rbf10,platform-tile,"
     "nav-rbf10,nav-tile,toy-rbf10,toy-tile"
 )
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["efficiency"]:
+        efficiency_main(argv[1:])
+        return
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--only", default=DEFAULT_RUNS, help="comma-separated task-policy pairs")
     parser.add_argument("--seeds", type=int, default=3)
@@ -388,7 +560,7 @@ def main() -> None:
     parser.add_argument(
         "--set", nargs="*", default=[], metavar="KEY=VALUE", help="SarsaAAC keyword arguments (Python literals)"
     )
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     th.set_num_threads(1)
     settings = {key: ast.literal_eval(value) for key, value in (item.split("=", 1) for item in args.set)}
     for pair in args.only.split(","):

@@ -100,7 +100,7 @@ REPLAY_RATIO_ONE = {"train_freq": 1, "gradient_steps": OFF_POLICY_ENVS}
 # 256, and a type-entropy bonus of 0.01), so its Platform entry is the rule for the envs it does not list. On an
 # episodic domain with its own entry a peer trains on that entry's env_wrapper chain, as rl-zoo3 does (the same
 # observations as the domain's evaluation env; on Goal the reference's reward scale of 1/50), and on the ids of
-# "reference_start" it starts its parameter actor at the reference MP-DQN code's function (benchmarks.reference_init):
+# "reference_start" it starts its parameter actor at the reference MP-DQN code's function (benchmarks.models):
 # with the yml's constant start MP-DQN never scored on Goal (P(goal) 0.0 after 60k steps, 0.684 with the reference's;
 # docs/pdqn.md).
 PEERS: dict[str, dict[str, Any]] = {
@@ -313,8 +313,8 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 # full: the regeneration, sized to about 5 core-hours on the development machine (4.2 measured on 2026-12-02;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 250-600 env steps/s on
-# one core (MP-DQN 4 ms a step, TD3 1.8), 30-100x slower than SarsaAAC, so 10 seeds of them at a 50k budget cost what
-# all of SarsaAAC's cells together cost. Hence, per env:
+# one core (MP-DQN 4 ms a step, TD3 1.8), many times slower than SarsaAAC (the report's "Training cost" line), so 10
+# seeds of them at a 50k budget cost what all of SarsaAAC's cells together cost. Hence, per env:
 #
 # * ``runs``: the headline learners with HEADLINE_SEEDS, the others with FEW_SEEDS (the costly defaults of a learner
 #   whose tuned twin is the headline row, with PAPER_SEEDS).
@@ -452,7 +452,39 @@ FULL: dict[str, Any] = {
     "final_episodes": 1000,
 }
 
-PRESETS = {"quick": QUICK, "full": FULL}
+# The studies of one algorithm family, each a preset of the same runner (its report is the grid's, from its cells):
+# P-DQN and MP-DQN with the reference settings (hyperparams/pdqn.yml, mpdqn.yml; docs/pdqn.md), and HybridPPO against
+# PPO through FlattenParameterizedAction at equal env steps and lanes (hyperparams/hppo.yml; docs/hppo.md).
+PDQN_STUDY: dict[str, Any] = {
+    "envs": {
+        "RoboCupDribblePaper-v0": {
+            "budget": 150_000,
+            "runs": _runs(FEW_SEEDS, "PDQN", "MPDQN"),
+            "long": {"budget": 1_000_000, "runs": _runs(FEW_SEEDS, "MPDQN")},
+        },
+        PLATFORM_ID: {"budget": 100_000, "runs": _runs(FEW_SEEDS, "PDQN", "MPDQN"), **_EPISODIC_SIZES},
+        "Goal-v0": {"budget": 100_000, "runs": _runs(FEW_SEEDS, "PDQN", "MPDQN"), **_EPISODIC_SIZES},
+    },
+    "eval_every": 500,
+    "eval_episodes": 100,
+    "final_episodes": 1000,
+}
+HPPO_STUDY: dict[str, Any] = {
+    "envs": {
+        "RoboCupDribblePaper-v0": {
+            "budget": 50_000,
+            "runs": _runs(PAPER_SEEDS, "HybridPPO", "PPO"),
+            "long": {"budget": 1_000_000, "runs": _runs(PAPER_SEEDS, "HybridPPO", "PPO")},
+        },
+        "RoboCupDribble-v0": {"budget": 50_000, "runs": _runs(PAPER_SEEDS, "HybridPPO", "PPO")},
+        PLATFORM_ID: {"budget": 100_000, "runs": _runs(PAPER_SEEDS, "HybridPPO", "PPO"), **_EPISODIC_SIZES},
+    },
+    "eval_every": 500,
+    "eval_episodes": 100,
+    "final_episodes": 1000,
+}
+
+PRESETS = {"quick": QUICK, "full": FULL, "pdqn": PDQN_STUDY, "hppo": HPPO_STUDY}
 
 
 def build_cells(preset: str | dict[str, Any]) -> list[Cell]:

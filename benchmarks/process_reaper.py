@@ -36,7 +36,7 @@ from types import TracebackType
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    import psutil
+    import psutil  # optional (sb3-aac[distributed]): the watchdog runs only beside a Ray instance
 
 POLL_MIN_SECONDS = 0.1  # the note interval right after the driver's process tree changed
 POLL_MAX_SECONDS = 1.0  # ... doubling to this while it stays the same
@@ -102,7 +102,7 @@ class ProcessReaper:
 def watch(driver_pid: int) -> None:
     """The watchdog's loop (in its own process): note the driver's new descendants until the driver stops it or is
     gone; in the second case end them and the processes of the claimed directories."""
-    import psutil
+    import psutil  # optional (sb3-aac[distributed]): the watchdog runs only beside a Ray instance
 
     me = psutil.Process()
     started = me.create_time()
@@ -140,7 +140,7 @@ def watch(driver_pid: int) -> None:
 def users_of(directories: list[str], started: float, skip: int) -> list[psutil.Process]:
     """This user's processes started since ``started`` (except ``skip``) whose command line names one of
     ``directories`` or that have a file open inside one."""
-    import psutil
+    import psutil  # optional (sb3-aac[distributed]): the watchdog runs only beside a Ray instance
 
     if not directories:
         return []
@@ -160,7 +160,7 @@ def users_of(directories: list[str], started: float, skip: int) -> list[psutil.P
 
 def running(process: psutil.Process) -> bool:
     """Whether ``process`` still runs: it exists, is not a zombie, and its id was not reused."""
-    import psutil
+    import psutil  # optional (sb3-aac[distributed]): the watchdog runs only beside a Ray instance
 
     try:
         return process.is_running() and process.status() != psutil.STATUS_ZOMBIE
@@ -171,7 +171,7 @@ def running(process: psutil.Process) -> bool:
 def reap(processes: list[psutil.Process]) -> None:
     """SIGTERM to each of ``processes`` still alive and to its descendants, then SIGKILL to those alive
     :data:`GRACE_SECONDS` later."""
-    import psutil
+    import psutil  # optional (sb3-aac[distributed]): the watchdog runs only beside a Ray instance
 
     targets: dict[int, psutil.Process] = {}
     for process in processes:

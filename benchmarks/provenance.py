@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import platform
 import subprocess
 import sys
 import time
@@ -24,6 +25,14 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import gymnasium
+import numba
+import numpy as np
+import stable_baselines3
+import torch as th
+
+import sb3_aac
 
 REPO = Path(__file__).resolve().parents[1]
 ENV_VAR = "SB3_AAC_BENCH_PROVENANCE"  # the invocation's provenance, JSON, for the cells it runs (workers inherit it)
@@ -182,3 +191,39 @@ def invocations(out: Path) -> list[dict[str, Any]]:
         else:
             entries.append(record)  # an end record whose start line was lost
     return entries
+
+
+# ---------------------------------------------------------------- where a cell ran: versions, machine, load
+
+
+def versions() -> dict[str, str]:
+    """The versions of Python and the packages a cell ran with, and the checkout's commit."""
+    return {
+        "python": platform.python_version(),
+        "sb3_aac": sb3_aac.__version__,
+        "git_commit": git_state().label,  # of the checkout this process imports (a Ray worker's own)
+        "stable_baselines3": stable_baselines3.__version__,
+        "torch": th.__version__,
+        "numpy": np.__version__,
+        "gymnasium": gymnasium.__version__,
+        "numba": numba.__version__,
+    }
+
+
+def machine() -> dict[str, Any]:
+    """The CPU, its cores, the platform and torch's threads."""
+    cpu = platform.processor() or platform.machine()
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    return {"cpu": cpu, "cores": os.cpu_count(), "platform": platform.platform(), "torch_threads": th.get_num_threads()}
+
+
+def loadavg() -> float | None:
+    """The one-minute load average, or None where the platform has none."""
+    try:
+        return round(os.getloadavg()[0], 2)
+    except OSError:
+        return None

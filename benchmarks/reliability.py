@@ -11,13 +11,16 @@ from typing import Any
 
 import numpy as np
 import torch as th
+from robocup_dribble import ENV_PROFILES
+from robocup_dribble.dribbler import HandCodedDribbler
+from robocup_dribble.evaluation import reliability_test
 
+import sb3_aac
 from benchmarks import cells
+from benchmarks.adapters import ALGOS, adapter_for
 from benchmarks.cells import atomic_write_json
 from benchmarks.domains import distance_stats
 from benchmarks.presets import BASELINES, PEERS, RELIABILITY_SEED, Cell
-from robocup_dribble import ENV_PROFILES
-from robocup_dribble.evaluation import reliability_test
 
 RELIABILITY_PLAYERS = 10_000
 HIST_BIN_METRES = 1.0
@@ -52,11 +55,7 @@ def load_policy(out: Path, result: dict[str, Any]) -> Any:
     cell = Cell.from_dict(result["cell"])
     path = out / result["model"]
     if cell.algo == "SarsaAAC" or cell.algo in PEERS:
-        import sb3_aac
-
         return load_checked(getattr(sb3_aac, cell.algo), path, device="cpu")
-    from benchmarks.adapters import ALGOS, adapter_for
-
     return adapter_for(load_checked(ALGOS[cell.algo], path, device="cpu"), cell.algo, cell.env_id)
 
 
@@ -80,8 +79,6 @@ def run_reliability(out: str | Path, n_players: int = RELIABILITY_PLAYERS, progr
     """The reliability test (``n_players`` fresh players, one episode each) of the best SarsaAAC policy, the best
     parameterized peer (P-DQN, MP-DQN, HybridPPO), the best SB3 baseline and the hand-coded dribbler of each dribbling
     env; cached in ``DIR/reliability.json`` (recomputed only for an entry whose policy or player count changed)."""
-    from robocup_dribble.dribbler import HandCodedDribbler
-
     th.set_num_threads(1)
     out = Path(out)
     results = cells.load_cells(out)

@@ -35,6 +35,7 @@ from benchmarks.report_text import (
     performance_table,
     reliability_table,
     setup_section,
+    training_cost_line,
 )
 
 
@@ -80,15 +81,17 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         final = "fig_final.png" if best else None
         rel_fig = "fig_reliability.png" if reliability else None
 
+    shown_dir = out.name if out.is_absolute() else out  # no path of the machine that made it
     lines = [
         "# Benchmark: SarsaAAC against P-DQN, MP-DQN, HybridPPO and SB3 baselines on RoboCup dribbling, Platform and the "
         "hybrid-action domains",
         "",
-        f"Generated {time.strftime('%Y-%m-%d %H:%M')} from {len(results)} cell files in `{out}`.",
+        f"Generated {time.strftime('%Y-%m-%d %H:%M')} from {len(results)} cell files in `{shown_dir}`.",
         "",
         "## Summary",
         "",
         *(budget_verdicts(groups, references) or ["- No env has SarsaAAC cells."]),
+        *training_cost_line(groups),
         "",
         "### The paper's figures against ours",
         "",

@@ -4,6 +4,7 @@ the baseline verdicts (decided by :mod:`benchmarks.significance`), and the setup
 from __future__ import annotations
 
 import json
+import shlex
 from pathlib import Path
 from typing import Any
 
@@ -68,10 +69,6 @@ def env_title(env_id: str) -> str:
 
 def reach_marks(env_id: str) -> tuple[float, float]:
     return REACH_MARKS["dribbling" if domains.is_dribbling(env_id) else env_id]
-
-
-def fmt_score(env_id: str, value: float) -> str:
-    return f"{value:.1f} m" if domains.is_dribbling(env_id) else f"{value:.3f}"
 
 
 def md_table(header: list[str], rows: list[list[str]], align: str | None = None) -> str:
@@ -482,12 +479,12 @@ def setup_section(
     out: Path, results: list[dict[str, Any]], groups: dict[str, list[Group]], reliability: dict[str, Any] | None
 ) -> list[str]:
     lines = ["## How this was made", ""]
-    commands = _unique(results, "command")
+    commands = [portable_command(command) for command in _unique(results, "command")]
     lines += ["Commands (from the repository root, with `PYTHONPATH=.:envs`):", "", "```bash"]
     lines += commands or ["(unknown: the cell files name no command)"]
     if reliability:
-        lines.append(reliability.get("command") or "python -m benchmarks.run --reliability --out DIR")
-    lines += [f"python -m benchmarks.report {out}", "```", ""]
+        lines.append(portable_command(reliability.get("command") or "python -m benchmarks.run --reliability --out DIR"))
+    lines += ["python -m benchmarks.report DIR", "```", ""]
     log = invocations(out)  # every invocation of the runner on out, killed and refused ones too
     if log:
         total = sum(entry["wall_s"] or 0.0 for entry in log)
@@ -607,3 +604,57 @@ def method_section(results: list[dict[str, Any]]) -> list[str]:
         "",
     ]
     return lines
+
+
+# The learners whose training the cost line compares with SarsaAAC's: torch networks taking one gradient step per
+# transition (benchmarks.presets.REPLAY_RATIO_ONE).
+TORCH_OFF_POLICY = ("MPDQN", "PDQN", "TD3", "SAC", "DDPG", "DQN")
+
+
+def training_cost_ratios(groups: dict[str, list[Group]]) -> dict[str, dict[str, float]]:
+    """Per env and off-policy torch learner (:data:`TORCH_OFF_POLICY`, default settings, the env's shortest budget):
+    its median training seconds per env step over SarsaAAC ``TilePolicy``'s on the same env and budget."""
+    ratios: dict[str, dict[str, float]] = {}
+    for env_id, gs in groups.items():
+        budget = min((g.budget for g in gs if not g.seconds), default=None)
+        main = [g for g in gs if g.budget == budget and not g.seconds]
+        tile = next((g for g in main if g.algo == "SarsaAAC" and g.config == "tile"), None)
+        if tile is None:
+            continue
+
+        def per_step(group: Group) -> float:
+            return float(np.median(group.values("train_wall_s") / group.values("env_steps")))
+
+        base = per_step(tile)
+        env_ratios = {g.label: per_step(g) / base for g in main if g.algo in TORCH_OFF_POLICY and g.config == g.algo.lower()}
+        if env_ratios:
+            ratios[env_id] = env_ratios
+    return ratios
+
+
+def training_cost_line(groups: dict[str, list[Group]]) -> list[str]:
+    """The summary's line on the cost of training: the range of :func:`training_cost_ratios` and its parts."""
+    ratios = training_cost_ratios(groups)
+    values = [ratio for env in ratios.values() for ratio in env.values()]
+    if not values:
+        return []
+    parts = "; ".join(
+        f"{env_id}: " + ", ".join(f"{label} {ratio:.0f}x" for label, ratio in sorted(env.items()))
+        for env_id, env in ratios.items()
+    )
+    return [
+        f"- **Training cost**: per env step, the off-policy torch learners (one gradient step per transition) train "
+        f"**{min(values):.0f}-{max(values):.0f}x** slower than SarsaAAC TilePolicy on the same env (median training "
+        f"wall time per env step, one core; {parts})."
+    ]
+
+
+def portable_command(command: str) -> str:
+    """A runner command as the report shows it: the ``--out`` directory written ``DIR``, so the report names no path of
+    the machine that made it."""
+    words = shlex.split(command)
+    for i, word in enumerate(words[:-1]):
+        if word == "--out":
+            words[i + 1] = "DIR"
+    shown = ["--out=DIR" if word.startswith("--out=") else word for word in words]
+    return shlex.join(shown)

@@ -38,8 +38,6 @@ another folder), which the grid's ``<config>-tuned`` cells read.
 
 from __future__ import annotations
 
-from benchmarks.execution import run_grid  # first: it pins BLAS to one thread before anything imports numpy
-
 import argparse
 import json
 import os
@@ -52,6 +50,7 @@ from typing import Any
 
 from benchmarks import cells
 from benchmarks.cost import estimate_text
+from benchmarks.execution import run_grid
 from benchmarks.engines import RayEngine
 from benchmarks.presets import PRESETS, Cell, build_cells, select
 from benchmarks.provenance import (

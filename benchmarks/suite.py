@@ -36,8 +36,6 @@ The suite lives here and not behind ``sb3-aac tune``: its tasks are the benchmar
 
 from __future__ import annotations
 
-import benchmarks.execution  # noqa: F401  (first: pins BLAS to one thread before numpy is imported)
-
 import argparse
 import ast
 import inspect
@@ -53,21 +51,21 @@ import gymnasium as gym
 import numpy as np
 import optuna
 import torch as th
+from hybrid_domains.baselines import scripted_policy
 from optuna.trial import FrozenTrial, TrialState
+from robocup_dribble import ENV_PROFILES, DribbleEnv
+from robocup_dribble.dribbler import HandCodedDribbler
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import VecEnv
 
 from benchmarks import domains
 from benchmarks.presets import FINAL_SEED
 from benchmarks.tuning import TUNE_EVAL_SEED, TUNE_SEED
-from robocup_dribble import ENV_PROFILES
 from sb3_aac import SarsaAAC
-from sb3_aac.cli.arguments import key_value
-from sb3_aac.cli.models import hyperparameters
-from sb3_aac.cli.tune import print_trial
+from sb3_aac.common.algorithms import hyperparameters, key_value
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
 from sb3_aac.common.statistics import welch_test
-from sb3_aac.tune.report import flat_settings, literal
+from sb3_aac.tune.report import flat_settings, literal, print_trial
 from sb3_aac.tune.search_spaces import policies, search_space
 from sb3_aac.tune.storage import open_storage
 from sb3_aac.tune.study import finished_trials, load_study, run_trials, trial_kwargs
@@ -169,8 +167,6 @@ def floor_policy(env_id: str, seed: int) -> RandomActions:
     if env_id in _LOCAL_ENVS:
         space = _LOCAL_ENVS[env_id][0]().action_space
     elif domains.is_dribbling(env_id):
-        from robocup_dribble import DribbleEnv
-
         space = DribbleEnv(profile=ENV_PROFILES[env_id]).action_space
     else:
         space = domains.episodic_env(env_id).action_space
@@ -188,12 +184,8 @@ def reference_score(env_id: str, n_episodes: int, seed: int) -> float:
     (Moving-v0, CatchPoint-v0), else the metric's maximum (Platform-v0's return 1 reaches the goal, a success share of
     1, the toy env's optimum return)."""
     if domains.is_dribbling(env_id):
-        from robocup_dribble.dribbler import HandCodedDribbler
-
         return greedy_score(env_id, HandCodedDribbler(profile=ENV_PROFILES[env_id]), n_episodes, seed)
     if env_id in ("Moving-v0", "CatchPoint-v0"):
-        from hybrid_domains.baselines import scripted_policy
-
         return greedy_score(env_id, ScriptedActions(scripted_policy(env_id)), n_episodes, seed)
     if env_id == domains.PLATFORM_ID:
         return domains.PLATFORM_SUCCESS_RETURN

@@ -23,6 +23,7 @@ from typing import Any
 import optuna
 import yaml
 
+from benchmarks.adapters import env_action_space
 from benchmarks.presets import BASELINES, SARSA_CONFIGS, Cell, base_config, is_tuned
 from benchmarks.zoo_hyperparams import HYPERPARAMS
 
@@ -71,7 +72,6 @@ def sample_kwargs(trial: optuna.Trial | optuna.trial.FixedTrial, env_id: str, al
         raise ValueError(f"{algo} has no search space; tunable: {sorted([*SB3_AAC_SPACES, *BASELINES])}")
     from rl_zoo3.hyperparams_opt import HYPERPARAMS_SAMPLER
 
-    from benchmarks.adapters import env_action_space
     from sb3_aac.common.spaces import ParameterizedActionSpec
 
     spec = ParameterizedActionSpec.from_space(env_action_space(env_id))

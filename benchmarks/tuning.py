@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 import optuna
+import torch as th
 import yaml
 from optuna.storages import BaseStorage, JournalStorage
 from optuna.storages.journal import JournalFileBackend
@@ -49,9 +50,11 @@ from optuna.trial import TrialState
 from stable_baselines3.common.callbacks import BaseCallback
 
 from benchmarks import domains
-from benchmarks.presets import ENV_SHORT, tuning_spec
+from benchmarks.models import build_model
+from benchmarks.presets import ENV_SHORT, Cell, tuning_spec
 from benchmarks.tuned import learner_name, sample_kwargs, tunable, tuned_dir
-from sb3_aac.common.output_files import pid_alive
+from benchmarks.workers import run_in_pool, worker_env
+from sb3_aac.common.output_files import pid_alive, replaced_atomically
 from sb3_aac.tune.storage import open_storage
 from sb3_aac.tune.study import FINISHED, median_pruner, tpe_sampler
 
@@ -219,9 +222,6 @@ def score(study: StudySpec, policy: Any) -> float:
 
 def _train_trial(trial: optuna.Trial, study: StudySpec) -> float:
     """Train the trial's settings once per tuning seed; the mean final greedy score. Raises ``TrialPruned``."""
-    from benchmarks.execution import build_model
-    from benchmarks.presets import Cell
-
     kwargs = sample_kwargs(trial, study.env_id, study.algo, study.config)
     scores, reports = [], 0
     for seed in range(TUNE_SEED, TUNE_SEED + study.seeds):
@@ -246,8 +246,6 @@ def run_trial(study_data: dict[str, Any], storage: str) -> tuple[str, str, str]:
     :return: the study's name, the outcome (``"complete"``, ``"pruned"``, ``"failed"`` or ``"skipped"``: the study
         already held its trials) and a line saying what happened (the traceback for a failure)
     """
-    import torch as th
-
     th.set_num_threads(1)
     study = StudySpec(**study_data)
     loaded = open_study(open_storage(storage), study)
@@ -276,23 +274,19 @@ Report = Callable[[str, str, str], None]
 
 
 def _run_local(tasks: Sequence[Task], workers: int, report: Report) -> None:
-    from benchmarks.execution import run_in_pool
-
     run_in_pool(run_trial, tasks, workers, report)
 
 
 def _run_ray(tasks: Sequence[Task], engine: Any, report: Report) -> None:
     """One Ray task (one CPU) per trial, on the engine's cluster (:class:`benchmarks.engines.RayEngine`)."""
-    import ray
-
-    from benchmarks.engines import WORKER_ENV, _python_path
+    import ray  # optional (sb3-aac[distributed]): imported only when trials run on Ray
 
     with engine.connected():
         remote = ray.remote(run_trial).options(
             num_cpus=1,
             max_retries=engine.max_retries,
             retry_exceptions=False,
-            runtime_env={"env_vars": {**WORKER_ENV, **_python_path()}},
+            runtime_env={"env_vars": worker_env()},
         )
         pending = {remote.remote(*task): task for task in tasks}
         try:
@@ -395,8 +389,6 @@ def run_tuning(
 def write_tuned(study: optuna.Study, spec: StudySpec, storage: str, folder: Path) -> Path:
     """The study's best settings as ``<folder>/<env id>/<learner>.yml``, and its trials in the journal file beside
     it (copied there when the study lives in another storage)."""
-    from sb3_aac.common.output_files import replaced_atomically
-
     path = folder / spec.env_id / f"{learner_name(spec.algo, spec.config)}.yml"
     journal = path.with_suffix(JOURNAL_SUFFIX)
     if storage != str(journal.resolve()):

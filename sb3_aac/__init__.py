@@ -8,10 +8,10 @@ imported on first use (PEP 562), so ``from sb3_aac.runtime import RuntimePolicy`
 from __future__ import annotations
 
 import importlib
-import os
 from typing import TYPE_CHECKING, Any
 
 from sb3_aac.runtime import RuntimePolicy
+from sb3_aac.version import __version__
 
 if TYPE_CHECKING:
     from sb3_aac.export import export_policy
@@ -19,9 +19,6 @@ if TYPE_CHECKING:
     from sb3_aac.pdqn import MPDQN, PDQN, PDQNPolicy
     from sb3_aac.sarsa_aac import DeepPolicy, MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, SarsaAACPolicy, TilePolicy
     from sb3_aac.wrappers import DiscretizeParameterizedAction, FlattenParameterizedAction, SelectObservation
-
-with open(os.path.join(os.path.dirname(__file__), "version.txt")) as file_handler:
-    __version__ = file_handler.read().strip()
 
 # Public name -> the module that defines it, imported by __getattr__ when the name is first used.
 LAZY_NAMES = {

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from sb3_aac.common.output_files import RunFolder
+from sb3_aac.version import __version__
 
 CARD = "README.md"
 MODEL = "model.zip"
@@ -69,8 +70,6 @@ def env_import(env_id: str) -> str:
 def model_card(algorithm: str, policy: str, evaluation: Evaluation, has_policy_file: bool, repo_id: str) -> str:
     """The model card: YAML metadata the Hub indexes, then what the model is, its figures, how to install sb3-aac (it
     is not on PyPI: its wheel) and a snippet that loads the model, makes its env and decides."""
-    from sb3_aac import __version__
-
     figures = "\n".join(
         f"| {name} | {value:.4g}{' ' + evaluation.units[name] if name in evaluation.units else ''} |"
         for name, value in evaluation.metrics.items()

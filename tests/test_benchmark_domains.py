@@ -136,7 +136,7 @@ def test_the_reference_goal_start_is_the_reference_function_on_our_scaling():
     import gymnasium as gym
 
     import hybrid_domains  # noqa: F401  (registers Goal-v0)
-    from benchmarks.reference_init import PassthroughPolicy, goal_passthrough
+    from benchmarks.models import PassthroughPolicy, goal_passthrough
     from hybrid_domains.reference_inputs import GoalFeatures
     from sb3_aac import MPDQN
 

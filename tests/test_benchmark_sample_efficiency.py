@@ -1,5 +1,5 @@
 """The domain tasks of benchmarks/learning.py (Moving-v0, Sliding-v0, CatchPoint-v0 scored by greedy success) and the
-comparison with TD3 of benchmarks/sample_efficiency.py."""
+comparison with TD3 of benchmarks/learning.py (efficiency)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from benchmarks import domains, learning
-from benchmarks.sample_efficiency import Curve, compare, reference_step
+from benchmarks.learning import Curve, compare, reference_step
 from hybrid_domains.baselines import scripted_policy
 
 

@@ -1,5 +1,5 @@
 """The benchmark's tuning stage (benchmarks/tuning.py), tuned configs (benchmarks/tuned.py), the equal wall-clock
-budget (benchmarks/wall_clock.py) and the report's sections on them (benchmarks/report_budgets.py)."""
+budget (benchmarks/evaluation.py's TrainingTimeLimit) and the report's sections on them (benchmarks/report_budgets.py)."""
 
 from __future__ import annotations
 
@@ -302,7 +302,8 @@ def write_tuned_file(folder: Path, env_id: str, learner: str, params: dict) -> N
     ],
 )
 def test_a_tuned_cell_builds_its_learner_with_the_best_trials_settings(tmp_path, monkeypatch, algo, config):
-    from benchmarks.execution import algo_config, build_model
+    from benchmarks.execution import algo_config
+    from benchmarks.models import build_model
     from benchmarks.tuned import learner_name
 
     trial = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=3)).ask()

@@ -491,8 +491,8 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
 def test_the_peers_take_their_yml_entry_or_the_stated_fallback():
     """MP-DQN on Goal: the reference settings, env (features, reward scale) and start; HybridPPO on Moving: hppo.yml's
     Platform entry (the rule of all its entries) on the domain's env; MP-DQN on Moving: its defaults."""
-    from benchmarks.execution import build_model
-    from benchmarks.reference_init import PassthroughPolicy
+    from benchmarks.models import build_model
+    from benchmarks.models import PassthroughPolicy
     from hybrid_domains.reference_inputs import ScaleReward
 
     goal, _, _ = build_model(Cell("Goal-v0", "MPDQN", "mpdqn", 0, 1000))
@@ -534,6 +534,7 @@ def test_the_quick_preset_runs_and_reports(tmp_path):
     assert bench_report.main([str(out)]) == 0
     text = (out / "report.md").read_text()
     assert "TilePolicy (recommended)" in text and "PPO" in text and "hand-coded" in text
+    assert str(tmp_path) not in text, "the report names no path of the machine that made it"
     assert (out / "fig_best.png").stat().st_size > 10_000
 
 
@@ -621,3 +622,15 @@ def test_runner_gives_up_on_an_address_where_no_ray_cluster_listens(tmp_path, ca
     assert time.monotonic() - start < 30
     err = capsys.readouterr().err
     assert f"no Ray cluster answers at 127.0.0.1:{port}" in err and "ray start --head" in err
+
+
+def test_the_report_shows_commands_without_their_out_directory():
+    from benchmarks.report_text import portable_command
+
+    assert portable_command("python -m benchmarks.run --preset full --out /work/x --workers 2") == (
+        "python -m benchmarks.run --preset full --out DIR --workers 2"
+    )
+    assert (
+        portable_command("python -m benchmarks.run --out=/tmp/y --only 'a,b'")
+        == "python -m benchmarks.run --out=DIR --only a,b"
+    )

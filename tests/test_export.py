@@ -18,7 +18,8 @@ import torch as th
 
 from sb3_aac import RuntimePolicy, SarsaAAC, export_policy
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from sb3_aac.export import encode_policy_file, policy_arrays, policy_header
+from sb3_aac.export import action_header, encode_policy_file
+from sb3_aac.sarsa_aac.export import policy_arrays, policy_header
 from sb3_aac.runtime import read_policy_file
 from tests.helpers import LAYOUTS, POLICIES
 
@@ -361,7 +362,7 @@ def test_header_is_plain_json(good_file: Path) -> None:
     (header_len,) = struct.unpack_from("<Q", data, 8)
     header = json.loads(data[16 : 16 + header_len])
     model = randomised_model("RbfMlpPolicy", "flat", n_rbf=3, hidden_units=2)
-    expected = policy_header(model.policy)
+    expected = policy_header(model.policy, action_header(model.policy.spec))
     for key in ("observation", "action", "approximators"):
         assert header[key] == expected[key]
     shapes = {name: list(a.shape) for name, a in policy_arrays(model.policy).items()}

@@ -13,6 +13,7 @@ import pytest
 
 from benchmarks import run as bench_run
 from benchmarks.engines import RayEngine, write_cell_files
+from benchmarks.execution import run_cell_safely
 from benchmarks.presets import Cell
 
 ENV_ID = "RoboCupDribblePaper-v0"
@@ -95,7 +96,7 @@ def test_a_node_killed_mid_grid_loses_no_cell(cluster, tmp_path):
             cluster.remove_node(worker, allow_graceful=False)  # killed, as a lost machine
 
     try:
-        engine.run(cells, tmp_path / "out", record)
+        engine.run(cells, tmp_path / "out", record, run_cell_safely)
     finally:
         cluster.add_node(**NODE)  # the module's cluster gets its second node back
         cluster.wait_for_nodes()

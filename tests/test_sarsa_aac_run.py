@@ -11,7 +11,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from sb3_aac import DeepPolicy, MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAAC, TilePolicy
 from sb3_aac.common.envs import ParameterizedTargetEnv
 from sb3_aac.sarsa_aac.policies import DenseBankPolicy
-from sb3_aac.sarsa_aac.sarsa_aac import select_types
+from sb3_aac.sarsa_aac.exploration import select_types
 from tests.helpers import OneStepEnv, PoisonWeights
 
 

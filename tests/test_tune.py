@@ -21,7 +21,8 @@ from optuna.trial import TrialState  # noqa: E402
 from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
 
 from sb3_aac import SarsaAAC  # noqa: E402
-from sb3_aac.cli import build_parser, hyperparameters, main  # noqa: E402
+from sb3_aac.cli import build_parser, main  # noqa: E402
+from sb3_aac.common.algorithms import hyperparameters  # noqa: E402
 from sb3_aac.common.envs import ParameterizedTargetEnv  # noqa: E402
 from sb3_aac.tune import (  # noqa: E402
     ALGORITHMS,

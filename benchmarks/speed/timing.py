@@ -1,5 +1,5 @@
 """The timing the speed scripts share: best-of-repeats microseconds per call (the measurement ``sb3-aac bench``
-prints, :func:`sb3_aac.cli.bench.microseconds`), the median of single calls, training throughput after a warm-up,
+prints, :func:`sb3_aac.common.timing.microseconds`), the median of single calls, training throughput after a warm-up,
 and the load average printed next to every figure (single runs on a shared machine: repeat them)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from sb3_aac.cli.bench import load_average, microseconds
+from sb3_aac.common.timing import load_average, microseconds
 
 __all__ = ["load_average", "median_microseconds", "microseconds", "steps_per_second"]
 

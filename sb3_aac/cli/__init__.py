@@ -1,5 +1,5 @@
 """
-The ``sb3-aac`` command line: train SarsaAAC, measure it, watch it, export it.
+The ``sb3-aac`` command line: train SarsaAAC, P-DQN, MP-DQN or HybridPPO, measure, watch and export the result.
 
 Run ``sb3-aac --help`` (or ``python -m sb3_aac.cli --help``) for the subcommands and examples. Errors print one line
 saying what to do and exit with status 2, without a traceback. Each command is a module of this package with its
@@ -19,22 +19,23 @@ from typing import Any
 from sb3_aac.cli.arguments import CliError, add_trust_argument, seed_int
 from sb3_aac.cli.bench import add_bench_command
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
-from sb3_aac.common.envs import register_toy_env
+from sb3_aac.common.algorithms import SettingsError
+from sb3_aac.version import __version__
 from sb3_aac.cli.evaluate import add_evaluate_commands
 from sb3_aac.cli.export import add_c_header_command, add_export_command
-from sb3_aac.cli.models import hyperparameters
 from sb3_aac.cli.pitch import add_pitch_command
 from sb3_aac.cli.push import add_push_command
 from sb3_aac.cli.render import add_render_command
 from sb3_aac.cli.train import add_train_command
 from sb3_aac.cli.tune import add_tune_command
 
-__all__ = ["CliError", "build_parser", "hyperparameters", "main", "register_toy_env"]
+__all__ = ["CliError", "build_parser", "main"]
 
 EPILOG = """\
 examples:
   sb3-aac train --env RoboCupDribblePaper-v0 --policy RbfPolicy --episodes 3000 --n-envs 16 --seed 0 --out runs/rbf
-  sb3-aac train --timesteps 200000 --set n_rbf=30 --set gamma=0.95 --tensorboard runs/tb --progress-bar
+  sb3-aac train --timesteps 200000 --set gamma=0.95 --tensorboard runs/tb --progress-bar   # TilePolicy, the default
+  sb3-aac train --algo mpdqn --env RoboCupDribblePaper-v0 --timesteps 200000 --out runs/mpdqn
   sb3-aac evaluate runs/rbf/model.zip --episodes 1000
   sb3-aac evaluate dribbler --profile v11           # the hand-coded dribbler, for comparison
   sb3-aac reliability runs/rbf/model.zip --out runs/rbf/reliability.png
@@ -45,20 +46,19 @@ examples:
   sb3-aac pitch runs/tile/model.zip --server PATH/rcssserver --episodes 1000   # a real rcssserver 19 against the env
   sb3-aac bench
 
-MODEL is a SarsaAAC model saved by train (model.zip), a policy exported by export (.aacp), or the word
-"dribbler" for the hand-coded dribbler (robocup_dribble.dribbler.HandCodedDribbler).
+MODEL is a model saved by train (model.zip: SarsaAAC, P-DQN, MP-DQN or HybridPPO), a policy exported by export
+(.aacp), or the word "dribbler" for the hand-coded dribbler (robocup_dribble.dribbler.HandCodedDribbler).
 """
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="sb3-aac",
-        description="Train, evaluate, watch and export SARSA Actor-Actor-Critic (SarsaAAC) agents, e.g. RoboCup dribblers.",
+        description="Train, evaluate, watch and export parameterized-action agents (SarsaAAC, P-DQN, MP-DQN, HybridPPO), "
+        "e.g. RoboCup dribblers.",
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    from sb3_aac import __version__
-
     parser.add_argument("--version", action="version", version=f"sb3-aac {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
@@ -104,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with terminate_as_interrupt():
             args.func(args)
-    except (CliError, OSError) as error:  # OSError: a file the user named failed in a way no check foresaw
+    except (CliError, SettingsError, OSError) as error:  # OSError: a file the user named failed in a way no check foresaw
         message = " ".join(str(error).split())  # one line, whatever the error's text holds
         print(f"sb3-aac {args.command}: error: {message}", file=sys.stderr)
         raise SystemExit(2) from None

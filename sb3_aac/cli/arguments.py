@@ -4,7 +4,6 @@ checked before any work. A user error is a :class:`CliError`: one line, exit sta
 from __future__ import annotations
 
 import argparse
-import ast
 import contextlib
 import importlib
 import math
@@ -73,17 +72,6 @@ def add_trust_argument(parser: argparse.ArgumentParser) -> None:
         help="load a model.zip whose pickled entries this command cannot stand in for (runs code from the file: only "
         "for files you or someone you trust made; by default nothing of a model.zip is unpickled)",
     )
-
-
-def key_value(text: str) -> tuple[str, Any]:
-    key, sep, raw = text.partition("=")
-    if not sep or not key.strip():
-        raise argparse.ArgumentTypeError(f"expected key=value (e.g. gamma=0.95), got {text!r}")
-    try:
-        value = ast.literal_eval(raw)
-    except (ValueError, SyntaxError):
-        value = raw  # a bare word such as type_exploration=boltzmann
-    return key.strip(), value
 
 
 def output_file(path: str, suffixes: tuple[str, ...], what: str) -> Path:

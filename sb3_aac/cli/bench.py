@@ -8,12 +8,11 @@ from __future__ import annotations
 import argparse
 import os
 import tempfile
-import timeit
-from collections.abc import Callable
 from functools import partial
 from typing import Any
 
 from sb3_aac.cli.arguments import positive_float
+from sb3_aac.common.timing import load_average, microseconds
 
 DECISION_PROFILE = "v11"  # the paper's env, RoboCupDribblePaper-v0
 QUICK_CONFIGS: tuple[tuple[str, dict[str, Any]], ...] = (("RbfPolicy", {"n_rbf": 10}), ("RbfPolicy", {"n_rbf": 50}))
@@ -48,17 +47,6 @@ def cmd_bench(args: argparse.Namespace) -> None:
         decision_costs(
             FULL_CONFIGS if args.full else QUICK_CONFIGS, calls=5000 if args.full else 500, repeats=5 if args.full else 3
         )
-
-
-def load_average() -> float:
-    """The one-minute load average (NaN where the platform has none)."""
-    return os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-
-
-def microseconds(fn: Callable[[], Any], calls: int, repeats: int) -> float:
-    """Best of ``repeats`` runs of ``calls`` calls, per call, after one warm-up call (numba compiles there)."""
-    fn()
-    return min(timeit.repeat(fn, number=calls, repeat=repeats)) / calls * 1e6
 
 
 def decision_costs(configs: tuple[tuple[str, dict[str, Any]], ...], calls: int, repeats: int) -> None:

@@ -78,9 +78,9 @@ def make_train_env(env_id: str, n_envs: int, seed: int | None, perception: str =
     if perception != "full":
         raise CliError(f"--perception {perception} is an option of the dribbling envs {sorted(DRIBBLE_IDS)}, not of {env_id}")
     if env_id == half_field_offense.ENV_ID:
-        env = half_field_offense.HalfFieldOffenseVecEnv(n_envs)
-        env.seed(seed)
-        return env
+        trials = half_field_offense.HalfFieldOffenseVecEnv(n_envs)
+        trials.seed(seed)
+        return trials
     from stable_baselines3.common.env_util import make_vec_env
 
     try:

@@ -1,80 +1,17 @@
-"""The models the commands build and load: the algorithms ``--algo`` names, their keyword arguments from ``--set``, a
-saved or exported model (or the hand-coded dribbler) checked to fit a dribbling profile."""
+"""The models the commands load: a saved or exported model (or the hand-coded dribbler) checked to fit a dribbling
+profile. The algorithms ``--algo`` names and their keyword arguments from ``--set`` are
+:mod:`sb3_aac.common.algorithms`'."""
 
 from __future__ import annotations
 
-import inspect
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 from sb3_aac.cli.arguments import CliError, input_file
 from sb3_aac.cli.envs import PROFILE_ENV_IDS
+from sb3_aac.common.algorithms import ALGOS, algorithm
 
-POLICIES = ("MlpPolicy", "RbfMlpPolicy", "RbfPolicy", "TilePolicy", "DeepPolicy")
-# SarsaAAC constructor arguments the CLI sets itself (not through --set).
-RESERVED = ("policy", "env", "tensorboard_log", "seed", "device", "verbose", "_init_setup_model")
-POLICY_KEYS = (
-    *("hidden_units", "n_rbf", "rbf_width", "obs_bounds", "tile_groups", "tiles_per_input", "n_tilings"),
-    *("net_arch", "sparsity", "normalize_obs", "kappa"),  # DeepPolicy's
-)
-
-
-class Algorithm(NamedTuple):
-    """What ``--algo`` names: the class name in sb3_aac, its default policy, and the policy arguments --set may give."""
-
-    class_name: str
-    default_policy: str
-    policy_keys: tuple[str, ...]
-
-
-PDQN_POLICY_KEYS = ("net_arch", "actor_net_arch", "param_bounding", "initial_params")
-ALGOS = {
-    "sarsa_aac": Algorithm("SarsaAAC", "TilePolicy", POLICY_KEYS),  # the recommended policy (docs/sarsa_aac.md)
-    "pdqn": Algorithm("PDQN", "MlpPolicy", PDQN_POLICY_KEYS),
-    "mpdqn": Algorithm("MPDQN", "MlpPolicy", PDQN_POLICY_KEYS),
-    "hppo": Algorithm("HybridPPO", "MlpPolicy", ("net_arch", "ortho_init", "log_std_init")),
-}
 MODEL_SUFFIXES = (".zip", ".aacp")
-
-
-def algo_key(value: str) -> str:
-    """``--algo``'s value as a key of :data:`ALGOS`: the key itself or the class name (``HybridPPO`` -> ``hppo``)."""
-    by_class = {spec.class_name.lower(): key for key, spec in ALGOS.items()}
-    return by_class.get(value.lower(), value)
-
-
-def algorithm(algo: str) -> Any:
-    """The class ``--algo`` names."""
-    import sb3_aac
-
-    return getattr(sb3_aac, ALGOS[algo].class_name)
-
-
-def sarsa_keys(algo: str = "sarsa_aac") -> list[str]:
-    cls = algorithm(algo)
-    return [name for name in inspect.signature(cls.__init__).parameters if name not in ("self", *RESERVED)]
-
-
-def hyperparameters(pairs: list[tuple[str, Any]], algo: str = "sarsa_aac") -> dict[str, Any]:
-    """``--set`` pairs as keyword arguments of ``--algo``'s class; policy arguments go into ``policy_kwargs``."""
-    valid = sarsa_keys(algo)
-    policy_keys = ALGOS[algo].policy_keys
-    kwargs: dict[str, Any] = {}
-    policy_kwargs: dict[str, Any] = {}
-    for key, value in pairs:
-        if key in policy_keys:
-            policy_kwargs[key] = value
-        elif key in valid:
-            kwargs[key] = value
-        else:
-            hint = " (set it with its own option, e.g. --seed)" if key in RESERVED else ""
-            raise CliError(f"unknown --set key {key!r}{hint}; valid keys: {', '.join(sorted([*valid, *policy_keys]))}")
-    if policy_kwargs:
-        given = kwargs.get("policy_kwargs") or {}
-        if not isinstance(given, dict):
-            raise CliError(f"policy_kwargs must be a dict literal such as {{'n_rbf': 30}}, got {given!r}")
-        kwargs["policy_kwargs"] = {**given, **policy_kwargs}
-    return kwargs
 
 
 def load_policy(model: str, profile: str | None, trust: bool = False) -> tuple[Any, str]:

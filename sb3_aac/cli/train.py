@@ -13,7 +13,6 @@ from sb3_aac.cli.arguments import (
     CliError,
     episode_count,
     episode_count_or_zero,
-    key_value,
     lane_count,
     output_dir,
     require_extra,
@@ -28,8 +27,8 @@ from sb3_aac.cli.envs import (
     make_train_env,
     max_episode_length,
 )
-from sb3_aac.cli.models import ALGOS, POLICIES, algo_key, algorithm, hyperparameters
 from sb3_aac.cli.reports import print_dribble_report
+from sb3_aac.common.algorithms import ALGOS, POLICIES, algo_key, algorithm, hyperparameters, key_value
 from sb3_aac.common.output_files import RunFolder
 
 DEFAULT_TIMESTEPS = 100_000
@@ -40,8 +39,10 @@ def add_train_command(add: Any) -> None:
     """Add ``train`` through ``add(name, help, example)`` (see :func:`sb3_aac.cli.build_parser`)."""
     train = add(
         "train",
-        "train SarsaAAC, then print a greedy evaluation (metres, share >= 20 m, ball-loss rate)",
-        "sb3-aac train --env RoboCupDribblePaper-v0 --episodes 3000 --n-envs 16 --set n_rbf=30 --out runs/rbf",
+        "train SarsaAAC, P-DQN, MP-DQN or HybridPPO (--algo), then print a greedy evaluation (metres, share >= 20 m, "
+        "ball-loss rate)",
+        "sb3-aac train --env RoboCupDribblePaper-v0 --policy RbfPolicy --episodes 3000 --n-envs 16 --set n_rbf=30 "
+        "--out runs/rbf",
     )
     train.add_argument("--env", default="RoboCupDribblePaper-v0", help="registered env id (default: %(default)s)")
     train.add_argument(
@@ -99,12 +100,7 @@ def cmd_train(args: argparse.Namespace) -> None:
     """Check everything the user named, then train, save and evaluate; each file of ``--out`` is the old or a whole new one."""
     if args.progress_bar:
         require_extra("progress", "--progress-bar", "tqdm", "rich")
-    import_gym_packages(args.gym_package)
-    check_env_id(args.env)
-    kwargs = hyperparameters(args.set, args.algo)
-    args.policy = args.policy or ALGOS[args.algo].default_policy
-    if args.algo != "sarsa_aac" and args.policy != "MlpPolicy":
-        raise CliError(f"--algo {args.algo} has one policy, MlpPolicy, not {args.policy}")
+    kwargs = model_settings(args)
     if args.tensorboard is not None:
         output_dir(args.tensorboard, "--tensorboard directory")
     folder = run_folder(args) if args.out is not None else None
@@ -129,6 +125,18 @@ def cmd_train(args: argparse.Namespace) -> None:
         save_run(model, folder, run_settings(args, model, kwargs))
     if args.eval_episodes > 0:
         evaluate_greedy(model, args)
+
+
+def model_settings(args: argparse.Namespace) -> dict[str, Any]:
+    """The env and the algorithm's keyword arguments checked (``args.policy`` set to the algorithm's default if not
+    given); ``build_model(args, model_settings(args))`` builds the untrained model. No file is touched."""
+    import_gym_packages(args.gym_package)
+    check_env_id(args.env)
+    kwargs = hyperparameters(args.set, args.algo)
+    args.policy = args.policy or ALGOS[args.algo].default_policy
+    if args.algo != "sarsa_aac" and args.policy != "MlpPolicy":
+        raise CliError(f"--algo {args.algo} has one policy, MlpPolicy, not {args.policy}")
+    return kwargs
 
 
 def run_folder(args: argparse.Namespace) -> RunFolder:

@@ -7,13 +7,12 @@ import argparse
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from sb3_aac.cli.arguments import CliError, episode_count, key_value, lane_count, positive_int, seed_int, step_count
+from sb3_aac.cli.arguments import CliError, episode_count, lane_count, positive_int, seed_int, step_count
 from sb3_aac.cli.envs import DRIBBLE_IDS, check_env_id, import_gym_packages, make_train_env
-from sb3_aac.cli.models import ALGOS, POLICIES, algo_key, hyperparameters
+from sb3_aac.common.algorithms import ALGOS, POLICIES, algo_key, hyperparameters, key_value
 
 if TYPE_CHECKING:  # Optuna is an optional dependency: imported when the command runs
     from optuna import Study
-    from optuna.trial import FrozenTrial
 
     from sb3_aac.tune import TuneSettings
 
@@ -105,6 +104,7 @@ def cmd_tune(args: argparse.Namespace) -> None:
         import optuna
 
         from sb3_aac.tune import finished_trials, load_study, open_storage, run_study
+        from sb3_aac.tune.report import print_trial
     except ImportError as error:
         raise CliError(f"tune needs Optuna ({error}): pip install 'sb3-aac[tune]'") from None
     import_gym_packages(args.gym_package)
@@ -159,26 +159,6 @@ def tune_settings(args: argparse.Namespace) -> TuneSettings:
         )
     except ValueError as error:
         raise CliError(str(error)) from None
-
-
-def print_trial(trial: FrozenTrial) -> None:
-    from optuna.trial import TrialState
-
-    from sb3_aac.tune.report import literal
-
-    params = ", ".join(f"{name}={literal(value)}" for name, value in trial.params.items())
-    if trial.state == TrialState.COMPLETE:
-        outcome = f"{trial.value:.4g}"
-    elif trial.state == TrialState.PRUNED:
-        scores = list(trial.intermediate_values.values())
-        outcome = (
-            "pruned: diverged"
-            if "diverged" in trial.user_attrs
-            else f"pruned after {len(scores)} evaluations, last {scores[-1]:.4g}"
-        )
-    else:
-        outcome = "interrupted" if trial.user_attrs.get("interrupted") else "failed"
-    print(f"trial {trial.number}: {outcome}  ({params})", flush=True)
 
 
 def print_best(study: Study, settings: TuneSettings) -> None:

@@ -15,6 +15,7 @@ from torch import nn
 
 from sb3_aac.common.spaces import ParameterizedActionSpec
 from sb3_aac.runtime.format import ARRAY_DTYPE, FORMAT_NAME, written_version
+from sb3_aac.version import __version__
 
 ACTIVATIONS = {nn.Tanh: "tanh", nn.ReLU: "relu", nn.LeakyReLU: "leaky_relu"}
 
@@ -67,8 +68,6 @@ def policy_file_contents(
     ``spec.low`` / ``spec.high`` and ``action`` as the header's action section
     (:func:`sb3_aac.export.action_header` of ``spec``).
     """
-    from sb3_aac import __version__
-
     space = policy.observation_space
     assert isinstance(space, spaces.Box)  # both policies take Box observations only
     size = len(arrays["obs_mid"])

@@ -16,7 +16,7 @@ import numpy as np
 from stable_baselines3.common.torch_layers import FlattenExtractor
 
 from sb3_aac.common.network_export import array_of, network_layers, policy_file_contents
-from sb3_aac.common.torch_layers import BoundsScaledFlatten
+from sb3_aac.hppo.torch_layers import BoundsScaledFlatten
 from sb3_aac.hppo.policies import HybridActorCriticPolicy
 from sb3_aac.runtime.format import output_layout
 

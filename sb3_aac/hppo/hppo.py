@@ -18,6 +18,7 @@ from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step, check_schedule
+from sb3_aac.common.hyperparameters import check_counts, check_finite, check_positive, check_unit_interval
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.hppo.buffers import HybridRolloutBuffer
 from sb3_aac.hppo.policies import HybridActorCriticPolicy, MlpPolicy
@@ -160,23 +161,15 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
             self._setup_model()
 
     def _check_hyperparameters(self) -> None:
-        for name in ("n_steps", "batch_size", "n_epochs"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
-        for name in ("gamma", "gae_lambda"):
-            if not 0 <= getattr(self, name) <= 1:
-                raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)}")
+        check_counts(self, "n_steps", "batch_size", "n_epochs")
+        check_unit_interval(self, "gamma", "gae_lambda")
         for name in ("clip_range", "clip_range_params", "clip_range_vf"):
             value = getattr(self, name)
             check_schedule(name, value, allow_none=name != "clip_range")
             if isinstance(value, (int, float)) and not value > 0:
                 raise ValueError(f"{name} must be > 0 (or a schedule; None for the default), got {value}")
-        for name in ("ent_coef", "param_ent_coef", "vf_coef"):
-            if not (isinstance(getattr(self, name), (int, float)) and math.isfinite(getattr(self, name))):
-                raise ValueError(f"{name} must be a finite number, got {getattr(self, name)!r}")
-        if not self.max_grad_norm > 0:
-            raise ValueError(f"max_grad_norm must be > 0, got {self.max_grad_norm}")
+        check_finite(self, "ent_coef", "param_ent_coef", "vf_coef")
+        check_positive(self, "max_grad_norm")
         if self.target_kl is not None and not self.target_kl > 0:
             raise ValueError(f"target_kl must be > 0 or None, got {self.target_kl}")
         if self.normalize_advantage and (self.batch_size < 2 or self.n_steps * self.n_envs < 2):

@@ -14,7 +14,7 @@ from torch import nn
 
 from sb3_aac.common.observations import check_box_observation_space, observation_batch
 from sb3_aac.common.spaces import ParameterizedActionSpec
-from sb3_aac.common.torch_layers import BoundsScaledFlatten
+from sb3_aac.hppo.torch_layers import BoundsScaledFlatten
 from sb3_aac.hppo.distributions import HybridDistribution
 
 NET_ARCH_KEYS = ("shared", "type", "params", "vf")
@@ -79,7 +79,7 @@ class HybridActorCriticPolicy(BasePolicy):
         outputs, 1 for the value)
     :param log_std_init: Initial log standard deviation of every parameter (scaled units: 0 means sigma = 1, half the
         range)
-    :param features_extractor_class: Features extractor (default :class:`~sb3_aac.common.torch_layers.BoundsScaledFlatten`:
+    :param features_extractor_class: Features extractor (default :class:`~sb3_aac.hppo.torch_layers.BoundsScaledFlatten`:
         a Box observation flattened and scaled to ``[-1, 1]`` where its bounds are finite)
     :param features_extractor_kwargs: Keyword arguments of the features extractor
     :param normalize_images: Whether to divide image observations by 255 (SB3's preprocessing)

@@ -27,6 +27,7 @@ from sb3_aac.common.array_env import array_path, step_as_vec_env
 from sb3_aac.common.divergence import divergence_error
 from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step, check_schedule
+from sb3_aac.common.hyperparameters import check_counts, check_fraction, check_positive, check_unit_interval
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
@@ -201,16 +202,10 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
             raise ValueError(f"This model has a {self.q_network_passes}-pass Q network: load it with {saved}.load")
         if self.loss not in LOSSES:
             raise ValueError(f"Unknown loss {self.loss!r}, valid values: {list(LOSSES)}")
-        for name in ("gamma", "tau", "actor_tau", "exploration_initial_eps", "exploration_final_eps"):
-            if not 0 <= getattr(self, name) <= 1:
-                raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)}")
-        if not 0 < self.exploration_fraction <= 1:
-            raise ValueError(f"exploration_fraction must be in (0, 1], got {self.exploration_fraction}")
-        for name in ("batch_size", "buffer_size", "target_update_interval"):
-            if not (isinstance(getattr(self, name), int) and getattr(self, name) >= 1):
-                raise ValueError(f"{name} must be an integer >= 1, got {getattr(self, name)}")
-        if not self.max_grad_norm > 0:
-            raise ValueError(f"max_grad_norm must be > 0, got {self.max_grad_norm}")
+        check_unit_interval(self, "gamma", "tau", "actor_tau", "exploration_initial_eps", "exploration_final_eps")
+        check_fraction(self, "exploration_fraction")
+        check_counts(self, "batch_size", "buffer_size", "target_update_interval")
+        check_positive(self, "max_grad_norm")
         check_schedule("actor_learning_rate", self.actor_learning_rate)
         if "multi_pass" in self.policy_kwargs:
             raise ValueError("policy_kwargs cannot set multi_pass: use PDQN (single pass) or MPDQN (multi-pass)")

@@ -1,71 +1,38 @@
 from __future__ import annotations
 
 import math
-import sys
-import time
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 import torch as th
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
-from stable_baselines3.common.utils import FloatSchedule, LinearSchedule, safe_mean
+from stable_baselines3.common.utils import FloatSchedule, LinearSchedule
 
 from sb3_aac.common.action_stats import ActionStats
 from sb3_aac.common.array_env import array_path, step_as_vec_env
-from sb3_aac.common.divergence import divergence_error
-from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step
+from sb3_aac.common.hyperparameters import check_finite, check_fraction, check_unit_interval
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
 from sb3_aac.sarsa_aac.deep import DeepKernel, DeepTraces
+from sb3_aac.sarsa_aac.exploration import TYPE_EXPLORATIONS, select_types
 from sb3_aac.sarsa_aac.kernels import Kernel
+from sb3_aac.sarsa_aac.monitoring import TRAIN_STAT_FIELDS, TrainingMonitor
 from sb3_aac.sarsa_aac.parameter_critic import ParameterCritic, check_parameter_update
 from sb3_aac.sarsa_aac.tile_coding import TileKernel, TileTraces
 from sb3_aac.sarsa_aac.policies import DeepPolicy, MlpPolicy, RbfMlpPolicy, RbfPolicy, SarsaAACPolicy, TilePolicy
 
 SelfSarsaAAC = TypeVar("SelfSarsaAAC", bound="SarsaAAC")
 
-TYPE_EXPLORATIONS = ("epsilon_greedy", "boltzmann")
 # Schedules are re-evaluated whenever training progress has moved by this much (0.1%), not at every step.
 SCHEDULE_RESOLUTION = 1e-3
 # The weights are checked (and kept as the last finite ones) every this many steps.
 CHECK_INTERVAL = 256
-# The training statistics summed between log dumps (the vector _train_stats, in this order): steps, TD error delta,
-# |delta|, delta^2, the action-type actor's squared SARSA error, steps whose parameters moved (delta > 0).
-TRAIN_STAT_FIELDS = ("n", "delta", "delta_abs", "delta_sq", "q_error_sq", "improved")
 
 
-def select_types(q: np.ndarray, rate: float, mode: str, rng: np.random.Generator) -> np.ndarray:
-    """
-    Exploratory choice of action types.
-
-    :param q: ``(n, K)`` action-type values
-    :param rate: ``epsilon`` (probability of a uniformly random type) for ``"epsilon_greedy"``, or the softmax
-        temperature (in units of Q) for ``"boltzmann"``; 0 is greedy
-    :param mode: ``"epsilon_greedy"`` or ``"boltzmann"``
-    :param rng: random generator
-    :return: ``(n,)`` chosen types
-    """
-    k: np.ndarray
-    if rate <= 0:
-        k = q.argmax(1)
-        return k
-    if mode == "epsilon_greedy":
-        k = q.argmax(1)
-        explore = rng.random(len(q)) < rate
-        if explore.any():
-            k[explore] = rng.integers(q.shape[1], size=int(explore.sum()))
-        return k
-    weights = np.exp((q - q.max(1, keepdims=True)) / rate)
-    cumulative = weights.cumsum(1)
-    u = rng.random(len(q)) * cumulative[:, -1]
-    k = np.minimum((cumulative < u[:, None]).sum(1), q.shape[1] - 1)
-    return k
-
-
-class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
+class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
     """
     SARSA Actor-Actor-Critic (SARSA-AAC) for parameterized actions: pick one of K action types, then a real-valued
     parameter vector for it.
@@ -127,20 +94,8 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
     parameters are stored between ``learn()`` calls. Callbacks run after ``env.step`` and before that step's
     update.
 
-    The paper gives no numbers for any hyperparameter; every default below was chosen by us. The learning rates
-    (0.1, per sample) were chosen among 0.05, 0.1, 0.2, 0.3 and 0.5 by the greedy scores of ``benchmarks/learning.py``
-    (seed 0; figures in ``docs/sarsa_aac.md``): TilePolicy on RoboCupDribblePaper-v0 after 150k steps on one lane made
-    24.7, 26.4 and 26.1 m with 0.05, 0.1 and 0.2 (15.9 m with 0.5); RbfPolicy 22.7 m with 0.1 and 20.5 m with 0.3
-    (16 lanes); MLP(2) 18.6 m with 0.1 and 4.1 m with 0.5 (300k steps); TilePolicy on Platform-v0 1.000 after 20k
-    steps on 4 and on 16 lanes. The toy env wants bolder steps (9.3 with 0.3, 7.2 with 0.1 after 20k steps).
-    ``trace_lambda`` (0) and ``exploration_episodes`` (None) stay off because neither won across tasks, measured with
-    the earlier batch rule (the lanes' summed steps divided by a bound on their overlap, rates 0.5) and TilePolicy,
-    5 seeds, IQM of the greedy scores (``benchmarks/learning.py``; full figures in ``docs/sarsa_aac.md``):
-    ``trace_lambda=0.7`` gave 25.5 against 24.7 m on RoboCupDribblePaper-v0 after 80k steps, 0.999 against 0.995
-    success on the navigation env (300k) and 21.8 m on RoboCupDribble-v0 (150k) either way, for several times the
-    cost per step; ``exploration_episodes=1000`` gave 25.9 against 24.7 m on the paper env after 80k steps (25 m within
-    2,100 episodes on every seed, against 3 of 5 seeds by 5,600), but tied on RoboCupDribble-v0 (21.9 vs 21.8 m) and
-    navigation (0.996 vs 0.995) and lost on the toy env (8.9 vs 9.3 after 20k steps).
+    The paper gives no numbers for any hyperparameter; every default below was chosen by us, on the measurements in
+    ``docs/sarsa_aac.md`` ("How the defaults were chosen").
 
     :param policy: The policy model to use (TilePolicy, recommended; MlpPolicy, RbfMlpPolicy, RbfPolicy; or a
         SarsaAACPolicy subclass)
@@ -283,22 +238,18 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
                 )
         if self.type_exploration not in TYPE_EXPLORATIONS:
             raise ValueError(f"Unknown type_exploration {self.type_exploration!r}, valid values: {list(TYPE_EXPLORATIONS)}")
-        if not (isinstance(self.gamma, (int, float, np.floating)) and 0 <= self.gamma <= 1):  # type: ignore[redundant-expr]
-            raise ValueError(f"gamma must be in [0, 1], got {self.gamma}")
-        if not 0 < self.exploration_fraction <= 1:
-            raise ValueError(f"exploration_fraction must be in (0, 1], got {self.exploration_fraction}")
+        check_unit_interval(self, "gamma")
+        check_fraction(self, "exploration_fraction")
         episodes = self.exploration_episodes
         # A run-time check of user input that the annotation cannot guarantee.
         if episodes is not None and not (
             isinstance(episodes, (int, np.integer)) and not isinstance(episodes, bool) and episodes >= 1  # type: ignore[redundant-expr]
         ):
             raise ValueError(f"exploration_episodes must be None or a whole number of episodes >= 1, got {episodes!r}")
-        for name in ("exploration_initial_eps", "exploration_final_eps", "param_noise_initial", "param_noise_final"):
-            if not (isinstance(getattr(self, name), (int, float, np.floating)) and 0 <= getattr(self, name) < math.inf):
-                raise ValueError(f"{name} must be a finite number >= 0, got {getattr(self, name)!r}")
+        exploration = ("exploration_initial_eps", "exploration_final_eps", "param_noise_initial", "param_noise_final")
+        check_finite(self, *exploration, minimum=0)
         check_parameter_update(self.parameter_update)
-        if not (isinstance(self.trace_lambda, (int, float, np.floating)) and 0 <= self.trace_lambda <= 1):  # type: ignore[redundant-expr]
-            raise ValueError(f"trace_lambda must be in [0, 1] (0: one-step updates), got {self.trace_lambda!r}")
+        check_unit_interval(self, "trace_lambda", note=" (0: one-step updates)")
         if not isinstance(self.replacing_traces, (bool, np.bool_)):
             raise ValueError(
                 f"replacing_traces must be True (replacing) or False (accumulating), got {self.replacing_traces!r}"
@@ -608,25 +559,7 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         policy = self.policy
         self._hidden_gain[policy.q_slice] = self._hidden_gain[policy.value_index] = unit**-2
 
-    # ------------------------------------------------------------------ divergence
-
-    def _keep_finite_weights(self) -> None:
-        """Check the weights and keep a copy of them as the last finite ones (restored on divergence)."""
-        self._check_weights()
-        self._finite_weights = {name: p.detach().clone() for name, p in self.policy.named_parameters()}
-        self._finite_weights_timestep = self.num_timesteps
-
-    def _on_non_finite_outputs(self, batch: np.ndarray) -> None:
-        """Name what made the outputs non-finite, restore the last finite weights, and raise."""
-        self._check_weights()
-        if not np.isfinite(batch).all():
-            raise ValueError(
-                f"The env returned a non-finite (nan or inf) observation by timestep {self.num_timesteps}; "
-                "SarsaAAC needs finite observations (the weights are unchanged)"
-            )
-        self._raise_divergence("the outputs (weights finite, but too large for the observations)")
-
-    # ------------------------------------------------------------------ statistics and logging
+    # ------------------------------------------------------------------ per-run state
 
     def _observe(self, obs: np.ndarray) -> None:
         """Fold new observations ``(n, D)`` into a deep policy's running statistics (other policies keep none)."""
@@ -644,19 +577,13 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         columns = np.array([*range(policy.n_types), policy.value_index])
         # hit[k]: the columns whose trace the features of (s, k) set: Q_k and V.
         self._trace_hits = np.concatenate((np.eye(policy.n_types), np.ones((policy.n_types, 1))), axis=1)
-        return TileTraces(
-            self.n_envs,
-            policy.approximators.n_features,
-            columns,
-            self.gamma * self.trace_lambda,
-            self.replacing_traces,
-        )
+        decay = self.gamma * self.trace_lambda
+        return TileTraces(self.n_envs, policy.approximators.n_features, columns, decay, self.replacing_traces)
 
     def _reset_train_stats(self) -> None:
         self._lr = np.zeros(self.policy.value_index + 1)
         self._rows = np.arange(self.n_envs)
-        # Per step since the last flush: delta, the SARSA error, the executed types and scaled parameters, V(s).
-        self._td_chunks: list[tuple[np.ndarray, ...]] = []
+        self._td_chunks = []
         self._hidden_gain = np.ones_like(self._lr)
         self._set_return_units()
         self._lane_returns = None
@@ -665,111 +592,3 @@ class SarsaAAC(GuardedAlgorithmMixin, EpisodeStatsMixin):
         # Sums since the last dump (TRAIN_STAT_FIELDS); the executed actions and the critic's values.
         self._train_stats = np.zeros(len(TRAIN_STAT_FIELDS))
         self._action_stats = ActionStats(self.policy.spec, value_name="value")
-
-    def _flush_td_chunks(self) -> None:
-        """Fold the per-step TD errors into the running sums, and stop on divergence."""
-        if not self._td_chunks:
-            return
-        delta, q_error, k, params, values = (np.concatenate(parts) for parts in zip(*self._td_chunks, strict=True))
-        self._td_chunks.clear()
-        sums = {
-            "n": len(delta),
-            "delta": delta.sum(),
-            "delta_abs": np.abs(delta).sum(),
-            "delta_sq": delta @ delta,
-            "q_error_sq": q_error @ q_error,
-            "improved": (delta > 0).sum(),
-        }
-        self._check_weights()  # names the approximators that diverged
-        if not np.isfinite([sums["delta"], sums["delta_abs"], sums["delta_sq"]]).all():
-            self._raise_divergence("the critic's TD error (delta)")
-        if not np.isfinite(sums["q_error_sq"]):
-            self._raise_divergence("the action-type actor's SARSA error")
-        self._train_stats += [sums[name] for name in TRAIN_STAT_FIELDS]
-        self._action_stats.add(k, params, values)
-
-    def _check_weights(self) -> None:
-        finite = self.policy.finite_outputs()
-        if not finite.all():
-            policy = self.policy
-            names = []
-            if not finite[policy.q_slice].all():
-                names.append(f"the action-type actor (Q of types {np.flatnonzero(~finite[policy.q_slice]).tolist()})")
-            if not finite[policy.param_slice].all():
-                names.append(f"the parameter actor (parameters {np.flatnonzero(~finite[policy.param_slice]).tolist()})")
-            if not finite[policy.value_index]:
-                names.append("the critic")
-            self._raise_divergence("the weights of " + " and ".join(names))
-
-    def _raise_divergence(self, what: str) -> None:
-        """Restore the last finite weights and raise a ``FloatingPointError`` saying so."""
-        restored = "the weights were not restored (no finite copy)"
-        if self._finite_weights is not None:
-            with th.no_grad():
-                for name, p in self.policy.named_parameters():
-                    p.copy_(self._finite_weights[name])
-            restored = (
-                f"the weights were restored to those of timestep {self._finite_weights_timestep}, "
-                "so save() keeps a usable model"
-            )
-        self._pending = None  # choose afresh with the restored weights
-        self._traces = None
-        remedy = (
-            f"Lower the learning rates (learning_rate={self.learning_rate}, q_learning_rate={self.q_learning_rate}, "
-            f"param_learning_rate={self.param_learning_rate}; normalised rates should be in [0, 1]), lower gamma, "
-            "or rescale the rewards"
-        )
-        raise divergence_error(type(self).__name__, what, self.num_timesteps, remedy, restored)
-
-    def _on_episodes_end(self, dones: np.ndarray, infos: list[dict[str, Any]], log_interval: int | None) -> None:
-        for i in np.flatnonzero(dones):
-            self._add_episode_keywords(infos[i])
-        self._episode_num += int(dones.sum())
-        if self.exploration_episodes is not None and self._episode_num <= self.exploration_episodes + len(dones):
-            self._update_exploration()
-        episodes, timesteps = self._last_dump
-        if (
-            log_interval is not None
-            and self._episode_num - episodes >= log_interval
-            and (self.num_timesteps - timesteps >= self.log_min_timesteps or not self._dumped_in_learn)
-        ):
-            self.dump_logs()
-
-    def dump_logs(self) -> None:
-        """Write log data (``rollout/``, ``time/`` and ``train/`` keys), then reset the ``train/`` statistics."""
-        assert self.ep_info_buffer is not None
-        assert self.ep_success_buffer is not None
-        self._flush_td_chunks()
-        time_elapsed = max((time.time_ns() - self.start_time) / 1e9, sys.float_info.epsilon)
-        fps = int((self.num_timesteps - self._num_timesteps_at_start) / time_elapsed)
-        record = self.logger.record
-        record("time/episodes", self._episode_num, exclude="tensorboard")
-        if len(self.ep_info_buffer) > 0 and len(self.ep_info_buffer[0]) > 0:
-            record("rollout/ep_rew_mean", safe_mean([ep_info["r"] for ep_info in self.ep_info_buffer]))
-            record("rollout/ep_len_mean", safe_mean([ep_info["l"] for ep_info in self.ep_info_buffer]))
-        self._record_keyword_means()
-        if len(self.ep_success_buffer) > 0:
-            record("rollout/success_rate", safe_mean(self.ep_success_buffer))
-        record("rollout/exploration_rate", self.exploration_rate)
-        stats = dict(zip(TRAIN_STAT_FIELDS, self._train_stats, strict=True))
-        n = stats["n"]
-        self._action_stats.record(self.logger)
-        if n > 0:
-            record("train/td_error_mean", stats["delta"] / n)
-            record("train/td_error_abs_mean", stats["delta_abs"] / n)
-            record("train/critic_loss", stats["delta_sq"] / n)
-            record("train/q_loss", stats["q_error_sq"] / n)
-            record("train/param_update_fraction", stats["improved"] / n)
-        progress = self._current_progress_remaining
-        record("train/param_noise", self.param_noise)
-        record("train/learning_rate", self.lr_schedule(progress))
-        record("train/q_learning_rate", self.q_lr_schedule(progress))
-        record("train/param_learning_rate", self.param_lr_schedule(progress))
-        record("train/n_updates", self._n_updates, exclude="tensorboard")
-        record("time/fps", fps)
-        record("time/time_elapsed", int(time_elapsed), exclude="tensorboard")
-        record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
-        self.logger.dump(step=self.num_timesteps)
-        self._last_dump = (self._episode_num, self.num_timesteps)
-        self._dumped_in_learn = True
-        self._train_stats[:] = 0

@@ -1,4 +1,5 @@
-"""A study's best settings, written as an ``sb3-aac train`` command line and as a ``hyperparams/sarsa_aac.yml`` entry."""
+"""A study's trials as lines, and its best settings written as an ``sb3-aac train`` command line and as a
+``hyperparams/sarsa_aac.yml`` entry."""
 
 from __future__ import annotations
 
@@ -6,6 +7,8 @@ import json
 import shlex
 from collections.abc import Mapping
 from typing import Any
+
+from optuna.trial import FrozenTrial, TrialState
 
 from sb3_aac.tune.study import TuneSettings
 
@@ -56,3 +59,20 @@ def zoo_entry(settings: TuneSettings, kwargs: Mapping[str, Any]) -> str:
         else:
             lines.append(f"  {name}: {literal(value)}")
     return "\n".join(lines)
+
+
+def print_trial(trial: FrozenTrial) -> None:
+    """One line for a finished trial: its number, its value (or why it was pruned or failed) and its settings."""
+    params = ", ".join(f"{name}={literal(value)}" for name, value in trial.params.items())
+    if trial.state == TrialState.COMPLETE:
+        outcome = f"{trial.value:.4g}"
+    elif trial.state == TrialState.PRUNED:
+        scores = list(trial.intermediate_values.values())
+        outcome = (
+            "pruned: diverged"
+            if "diverged" in trial.user_attrs
+            else f"pruned after {len(scores)} evaluations, last {scores[-1]:.4g}"
+        )
+    else:
+        outcome = "interrupted" if trial.user_attrs.get("interrupted") else "failed"
+    print(f"trial {trial.number}: {outcome}  ({params})", flush=True)

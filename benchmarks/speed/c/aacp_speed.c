@@ -1,5 +1,5 @@
 /*
- * Nanoseconds per aacp_act decision (sb3_aac/runtime/c/aacp.h), for benchmarks/speed/c_runtime_speed.py.
+ * Nanoseconds per aacp_act decision (sb3_aac/runtime/c/aacp.h), for benchmarks/speed/decisions.py (c).
  *
  *   aacp_speed POLICY OBS CALLS REPEATS   OBS: n x D float64 observations (raw); the decisions cycle through them.
  *                                         Prints the best of REPEATS runs of CALLS decisions, in ns per decision.
