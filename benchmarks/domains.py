@@ -3,11 +3,12 @@
 * Dribbling (``RoboCupDribblePaper-v0``, ``RoboCupDribble-v0``): batched :class:`~robocup_dribble.DribbleVecEnv`
   lanes; scored by :func:`robocup_dribble.evaluation.evaluate_dribbling` (metres along +x), whose episode slots each
   have their own seeded player, start state and noise (common random numbers).
-* Episodic domains (:data:`EPISODIC`): Platform-v0 (PyPI ``hybrid-platform``) and this repository's
-  ``hybrid_domains`` (Goal-v0, Moving-v0, Sliding-v0, CatchPoint-v0), one Gymnasium env each (:func:`episodic_env`)
-  in SB3's ``DummyVecEnv``; scored by greedy episodes, episode slot ``j`` of a set with seed ``s`` starting from
-  ``reset(seed=s * SLOT_STRIDE + j)``, so every policy meets the same episodes too. Each is ranked by its published
-  metric (:func:`metric`): mean return (Platform, Moving, Sliding) or success share (Goal: P(goal); CatchPoint).
+* Episodic domains (:data:`EPISODIC`): Platform-v0 (PyPI ``hybrid-platform``), this repository's
+  ``hybrid_domains`` (Goal-v0, Moving-v0, Sliding-v0, CatchPoint-v0) and ``HalfFieldOffense-v0``, one Gymnasium env
+  each (:func:`episodic_env`) in SB3's ``DummyVecEnv`` (HFO's own learners: its batched vector env); scored by
+  greedy episodes, episode slot ``j`` of a set with seed ``s`` starting from ``reset(seed=s * SLOT_STRIDE + j)``, so
+  every policy meets the same episodes too. Each is ranked by its published metric (:func:`metric`): mean return
+  (Platform, Moving, Sliding) or success share (Goal and HFO: P(goal); CatchPoint).
 
 Each score comes as the summary every result file uses (:func:`summarize`) plus the per-episode scores in slot
 order, so two policies' episodes can be paired.
@@ -27,7 +28,7 @@ from robocup_dribble.evaluation import evaluate_dribbling
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import VecEnv
 
-from benchmarks.presets import HYBRID_IDS, PLATFORM_ID
+from benchmarks.presets import HFO_ID, HYBRID_IDS, PLATFORM_ID
 from sb3_aac import SelectObservation
 
 REACH_METRES = 20.0  # the paper's "at least around 20 meters with high reliability" (section 4.1)
@@ -79,6 +80,21 @@ def _hybrid(env_id: str) -> Callable[[], gym.Env]:
     return make
 
 
+def _half_field_offense() -> gym.Env:
+    import half_field_offense  # noqa: F401  (registers HalfFieldOffense-v0)
+
+    return gym.make(HFO_ID)
+
+
+# Half Field Offense's published P(goal) (docs/half_field_offense.md has their protocols: the best agent or the mean
+# over seeds).
+HFO_REFERENCES: tuple[tuple[str, float, str], ...] = (
+    ("MP-DQN (mean over seeds)", 0.913, "Bester, James, Konidaris 2019, arXiv:1905.04388"),
+    ("P-DQN (best of 9)", 0.997, "Xiong et al. 2018, arXiv:1810.06394"),
+    ("PA-DDPG (best of 7)", 1.0, "Hausknecht & Stone, ICLR 2016"),
+    ("Helios (hand-coded)", 0.962, "as reported by Hausknecht & Stone, ICLR 2016"),
+)
+
 # Published figures of the new domains (Li et al., ICLR 2022 (HyAR), Table 2, as summarised in the issue; DI-engine's
 # Moving-v0 curve read off its docs plot at 3M steps).
 EPISODIC: dict[str, EpisodicDomain] = {
@@ -100,8 +116,9 @@ EPISODIC: dict[str, EpisodicDomain] = {
     "CatchPoint-v0": EpisodicDomain(
         _hybrid("CatchPoint-v0"), "success_share", "caught", (("HyAR-TD3", 0.90, "Li et al., ICLR 2022 (HyAR), Table 2"),)
     ),
+    HFO_ID: EpisodicDomain(_half_field_offense, "success_share", "is_success", HFO_REFERENCES),
 }
-assert set(EPISODIC) == {PLATFORM_ID, *HYBRID_IDS}
+assert set(EPISODIC) == {PLATFORM_ID, *HYBRID_IDS, HFO_ID}
 
 
 def is_dribbling(env_id: str) -> bool:
@@ -129,7 +146,7 @@ def metric(env_id: str) -> str:
 def metric_label(env_id: str) -> str:
     if is_dribbling(env_id):
         return "metres dribbled"
-    if env_id == "Goal-v0":
+    if env_id in ("Goal-v0", HFO_ID):
         return "P(goal)"
     return "mean return" if metric(env_id) == "return_mean" else "success share"
 
@@ -150,6 +167,12 @@ def train_env(env_id: str, n_envs: int, seed: int, wrapper: Callable[[gym.Env], 
         env.seed(seed)
         return env
     episodic_domain(env_id)  # a clear error for an unknown id, before any env is built
+    if env_id == HFO_ID and wrapper is None:  # its trials step side by side in compiled code
+        from half_field_offense import HalfFieldOffenseVecEnv
+
+        trials = HalfFieldOffenseVecEnv(n_envs)
+        trials.seed(seed)
+        return trials
     return make_vec_env(lambda: episodic_env(env_id, wrapper), n_envs=n_envs, seed=seed)
 
 

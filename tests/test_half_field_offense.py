@@ -290,7 +290,7 @@ def test_a_shot_into_the_goal_ends_the_trial_as_goal_with_the_bonus():
         _obs, r, terminated, truncated, info = env.step((1, (np.zeros(2), np.zeros(1), np.zeros(2))))
         if terminated:
             break
-    assert terminated and not truncated and info["status"] == "GOAL" and r > 4.0
+    assert terminated and not truncated and info["status"] == "GOAL" and info["is_success"] and r > 4.0
 
 
 def test_a_ball_wide_of_the_goal_is_out_of_bounds_one_cycle_late():
@@ -474,6 +474,7 @@ def test_vector_env_with_one_lane_equals_the_single_env():
         obs_v, rewards, dones, infos = vec.step([actions_s])
         obs_s, r, terminated, truncated, info = single.step(actions_s)
         assert rewards[0] == np.float32(r) and dones[0] == (terminated or truncated) and infos[0]["status"] == info["status"]
+        assert infos[0].get("is_success") == info.get("is_success")
         if dones[0]:
             ended += 1
             np.testing.assert_array_equal(infos[0]["terminal_observation"], obs_s)

@@ -85,7 +85,8 @@ class HalfFieldOffenseEnv(gym.Env):
        ``OUT_OF_TIME`` by a ball untouched for more than ``untouched_time`` (100) cycles.
     2. Truncation: ``OUT_OF_TIME`` after more than ``frames_per_trial`` (500) cycles.
 
-    ``info["status"]`` is HFO's status name (``"IN_GAME"`` while the trial goes on). :meth:`step` before the first
+    ``info["status"]`` is HFO's status name (``"IN_GAME"`` while the trial goes on); the last step's ``info`` also
+    has ``is_success`` (a goal), which SB3 logs as ``rollout/success_rate``. :meth:`step` before the first
     :meth:`reset`, or after the trial ended, raises Gymnasium's ``ResetNeeded``; an invalid action raises
     ``ValueError`` and changes nothing.
 
@@ -140,7 +141,9 @@ class HalfFieldOffenseEnv(gym.Env):
             self.render()
         terminated, truncated = bool(out.terminated[0]), bool(out.truncated[0])
         self._over, self._status = terminated or truncated, int(out.status[0])
-        info = {"status": referee.STATUS_NAMES[self._status]}
+        info: dict[str, Any] = {"status": referee.STATUS_NAMES[self._status]}
+        if self._over:
+            info["is_success"] = self._status == referee.GOAL
         return out.observations[0], float(out.rewards[0]), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:

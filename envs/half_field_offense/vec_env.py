@@ -28,7 +28,8 @@ class HalfFieldOffenseVecEnv(LaneVecEnv):
     in, an :class:`robocup_dribble.vec_env.ArrayStep` out, ``episode_info["status"]`` the ``(N,)`` status codes of
     :data:`half_field_offense.referee.STATUS_NAMES`), :meth:`step_packed` (the same arrays in, SB3's return out) and
     :meth:`step` (SB3's form). ``infos[i]["status"]`` is HFO's status name; where a trial ended the infos also carry
-    ``terminal_observation``, ``TimeLimit.truncated`` and ``episode = {"r", "l", "t"}``.
+    ``is_success`` (a goal: SB3 logs it as ``rollout/success_rate``), ``terminal_observation``, ``TimeLimit.truncated``
+    and ``episode = {"r", "l", "t"}``.
     """
 
     metadata = HalfFieldOffenseEnv.metadata
@@ -73,8 +74,11 @@ class HalfFieldOffenseVecEnv(LaneVecEnv):
         )
 
     def _infos(self, step: ArrayStep) -> list[dict[str, Any]]:
-        names = referee.STATUS_NAMES
-        return [{"status": names[code]} for code in step.episode_info["status"].tolist()]
+        names, in_game, goal = referee.STATUS_NAMES, referee.IN_GAME, referee.GOAL
+        return [
+            {"status": names[code]} if code == in_game else {"status": names[code], "is_success": code == goal}
+            for code in step.episode_info["status"].tolist()
+        ]
 
     def close(self) -> None:
         """Nothing to release."""
