@@ -206,9 +206,10 @@ def trial_record(trial: Trial, index: int, group: str, task: HFOTask, options: d
     }
 
 
-def hand_coded(task: HFOTask) -> Policy:
-    """The hand-coded agent (:class:`HandCodedOffense`) as a :data:`Policy`."""
-    agent = HandCodedOffense(task.distance_normaliser, task.tackle)
+def hand_coded(task: HFOTask, agent: HandCodedOffense | None = None) -> Policy:
+    """The hand-coded agent (``agent``, default :class:`HandCodedOffense` for ``task``) as a :data:`Policy`."""
+    if agent is None:
+        agent = HandCodedOffense(task.distance_normaliser, task.tackle)
 
     def policy(obs: np.ndarray, state: np.ndarray) -> tuple[int, np.ndarray]:
         kinds, params = agent.act(obs)
@@ -306,16 +307,18 @@ class Outcomes:
         return goals
 
 
-def server_trials(binary: str | Path, n_trials: int, seed: int, task: HFOTask) -> tuple[np.ndarray, Outcomes]:
-    """``n_trials`` trials of the hand-coded agent on the server with its noise on: start states ``(n, STATE_SIZE)``
-    and outcomes."""
+def server_trials(
+    binary: str | Path, n_trials: int, seed: int, task: HFOTask, agent: HandCodedOffense
+) -> tuple[np.ndarray, Outcomes]:
+    """``n_trials`` trials of ``agent`` on the server with its noise on: start states ``(n, STATE_SIZE)`` and
+    outcomes."""
     options = hfo_options(task, noise=True, seed=seed)
     starts, status, cycles = physics.new_state(n_trials), np.zeros(n_trials, np.int64), np.zeros(n_trials, np.int64)
     with ServerProcess(binary, options) as process:
         player, trainer = process.endpoints()
         server = HFOServer(ServerSession(player, trainer, make_profile(PROFILE), WORLD_SEED, noise=True), task)
         server.open()
-        policy = hand_coded(task)
+        policy = hand_coded(task, agent)
         for j in range(n_trials):
             trial = server.play(policy)
             starts[j], status[j], cycles[j] = trial.start, trial.status, trial.cycles
@@ -324,12 +327,11 @@ def server_trials(binary: str | Path, n_trials: int, seed: int, task: HFOTask) -
     return starts, Outcomes(status, cycles)
 
 
-def env_trials(starts: np.ndarray, seed: int, task: HFOTask) -> Outcomes:
-    """The hand-coded agent's trials in the env (v15 with noise) from the given start states."""
+def env_trials(starts: np.ndarray, seed: int, task: HFOTask, agent: HandCodedOffense) -> Outcomes:
+    """``agent``'s trials in the env (v15 with noise) from the given start states."""
     n = len(starts)
     lanes = HFOLanes(n, make_profile(PROFILE), task, np.random.default_rng(seed))
     obs = lanes.place(np.arange(n), starts)
-    agent = HandCodedOffense(task.distance_normaliser, task.tackle)
     status, cycles = np.zeros(n, np.int64), np.zeros(n, np.int64)
     while not status.all():
         kinds, params = agent.act(obs)
@@ -355,22 +357,42 @@ def welch_test(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
     return t, math.erfc(abs(t) / math.sqrt(2.0))
 
 
-def compare(binary: str | Path, n_trials: int, seed: int) -> str:
-    """Play ``n_trials`` matched trials on the server and in the env; the figures as text."""
+def paired_test(differences: np.ndarray) -> tuple[float, float]:
+    """``(t, two-sided p)`` of the paired test that ``differences`` have mean 0 (normal approximation)."""
+    se = differences.std(ddof=1) / math.sqrt(len(differences))
+    t = 0.0 if se == 0.0 else differences.mean() / se
+    return t, math.erfc(abs(t) / math.sqrt(2.0))
+
+
+def matched_trials(binary: str | Path, n_trials: int, seed: int, shooting_distance: float = 25.0) -> tuple[Outcomes, Outcomes]:
+    """``(server, env)`` outcomes of ``n_trials`` trials of :class:`HandCodedOffense` (shooting from
+    ``shooting_distance``) from the server referee's start states (``server::random_seed = seed``), both with noise
+    (the env's from ``numpy.random.default_rng(seed)``)."""
     task = HFOTask()
-    starts, real = server_trials(binary, n_trials, seed, task)
-    sim = env_trials(starts, seed, task)
+    agent = HandCodedOffense(task.distance_normaliser, task.tackle, shooting_distance=shooting_distance)
+    starts, real = server_trials(binary, n_trials, seed, task, agent)
+    return real, env_trials(starts, seed, task, agent)
+
+
+def compare(binary: str | Path, n_trials: int, seed: int, shooting_distance: float = 25.0) -> str:
+    """The figures of :func:`matched_trials` as text."""
+    real, sim = matched_trials(binary, n_trials, seed, shooting_distance)
     z, p = two_proportion_test(real.goals, sim.goals)
     both = real.goals & sim.goals
     only_real, only_sim = int((real.goals & ~sim.goals).sum()), int((sim.goals & ~real.goals).sum())
     t, p_steps = welch_test(real.cycles[real.goals].astype(float), sim.cycles[sim.goals].astype(float))
+    pairs = (real.cycles[both] - sim.cycles[both]).astype(float)
+    t_pairs, p_pairs = paired_test(pairs)
     lines = [
-        f"{n_trials} matched trials (server seed {seed}): the hand-coded agent, HFO 1v0, noise on",
+        f"{n_trials} matched trials (server seed {seed}): the hand-coded agent shooting from {shooting_distance:g} m, "
+        "HFO 1v0, noise on",
         f"P(goal)   server {real.goals.mean():.4f}   env {sim.goals.mean():.4f}   difference "
         f"{real.goals.mean() - sim.goals.mean():+.4f}   two-proportion z {z:+.2f}, p {p:.3f}",
         f"          goals in both {int(both.sum())}, only on the server {only_real}, only in the env {only_sim}",
         f"steps to goal (mean)   server {real.cycles[real.goals].mean():.2f}   env {sim.cycles[sim.goals].mean():.2f}"
         f"   Welch t {t:+.2f}, p {p_steps:.3f}",
+        f"          paired on the {len(pairs)} trials scored in both: server - env {pairs.mean():+.2f} cycles "
+        f"(sd {pairs.std(ddof=1):.2f}), t {t_pairs:+.2f}, p {p_pairs:.3f}",
     ]
     for name, outcomes in (("server", real), ("env", sim)):
         counts = {referee.STATUS_NAMES[c]: int((outcomes.status == c).sum()) for c in range(1, len(referee.STATUS_NAMES))}
@@ -386,6 +408,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     matched = commands.add_parser("compare", help="P(goal) and steps to goal, server vs env, on matched trials")
     matched.add_argument("--trials", type=int, default=1000)
     matched.add_argument("--seed", type=int, default=1, help="the server's random_seed and the env's generator seed")
+    matched.add_argument("--shooting-distance", type=float, default=25.0, help="the agent's (m; default: %(default)s)")
     args = parser.parse_args(argv)
     binary = os.environ.get(SERVER_VARIABLE)
     if not binary:
@@ -394,7 +417,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "record":
         print(f"recorded {record(binary, args.out)} trials into {args.out}")
     else:
-        print(compare(binary, args.trials, args.seed))
+        print(compare(binary, args.trials, args.seed, args.shooting_distance))
     return 0
 
 

@@ -323,6 +323,8 @@ class ServerSession:
     def place(self, type_id: int, start: np.ndarray) -> None:
         """Set an episode up in the current think window: type ``type_id``, recovery, ball parked, player and ball
         placed as in ``start`` ``(STATE_SIZE,)``; the trainer's look must confirm the placement."""
+        if type_id != 0 and self.profile.name not in HETEROGENEOUS_CHECKED:
+            raise ValueError(f"profile {self.profile.name!r} plays only the default type 0 on a real server, not {type_id}")
         if type_id != self.player_type:
             self._trainer_command(protocol.change_player_type(TEAM, UNUM, type_id))
             self.player_type = type_id
