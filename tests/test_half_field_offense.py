@@ -576,6 +576,22 @@ def test_every_recorded_server_cycle_replays_within_the_printed_precision(trial)
     np.testing.assert_allclose(states[:, PRINTED_COLUMNS], recorded[:, PRINTED_COLUMNS], rtol=1e-5, atol=1e-4)
 
 
+@pytest.mark.parametrize(
+    "trial", [t for t in RECORDED_TRIALS if t["group"] in ("hand_coded", "capped")], ids=lambda trial: trial["id"]
+)
+def test_the_hand_coded_agent_plays_the_recorded_server_trials_alike_in_the_env(trial):
+    """Closed loop (features of the env's own state): the same action every cycle and the same end."""
+    lanes = HFOLanes(1, without_noise(make_profile("v15")), HFOTask(**trial["task"]), np.random.default_rng(0))
+    obs = lanes.place(np.array([0]), rcss.read_state(trial["start"])[None])
+    agent, kinds, status = HandCodedOffense(), [], referee.IN_GAME
+    while status == referee.IN_GAME:
+        kind, params = agent.act(obs)
+        step = lanes.step(kind, params, autoreset=False)
+        obs, status = step.observations, step.status[0]
+        kinds.append(int(kind[0]))
+    assert kinds == [action[0] for action in trial["actions"]] and referee.STATUS_NAMES[status] == trial["status"]
+
+
 def test_place_starts_a_trial_from_a_given_state_as_it_is():
     lanes = quiet_lanes(2)
     start = rcss.read_state(RECORDED_TRIALS[0]["start"])
