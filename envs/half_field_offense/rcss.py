@@ -13,7 +13,8 @@ HFO mode and refuses the client protocol 15.)
 ``tests/test_half_field_offense.py``): the hand-coded agent's, trials that kick the ball out of bounds, trials that
 leave the ball untouched, and (with ``hfo_max_trial_time`` 40) trials ended by the cycle cap. ``compare`` plays the
 hand-coded agent on the server with its noise on, then the same start states in the env with the env's noise, and
-prints P(goal) and the mean cycles to a goal of both with tests on the differences.
+prints P(goal) and the mean cycles to a goal of both with tests on the differences (``--aim 6.5
+--shooting-distance 35``: every shot from 35 m goes 0.5 m inside the post, where the kick noise decides).
 
 The server runs HFO's options (``server::hfo``, ``coach_w_referee``, the trial settings of :class:`HFOTask`) with
 :func:`robocup_dribble.rcss.client.server_options` for the ``v15`` profile (synchronous mode, fullstate, a trainer
@@ -44,7 +45,7 @@ from half_field_offense.agent import HandCodedOffense
 from half_field_offense.lanes import HFOLanes
 from half_field_offense.task import HFOTask
 from robocup_dribble import physics
-from robocup_dribble.params import make_profile, without_noise
+from robocup_dribble.params import PITCH_HALF_LENGTH, make_profile, without_noise
 from robocup_dribble.player_types import default_player_type, stack_player_types
 from robocup_dribble.rcss import protocol
 from robocup_dribble.rcss.client import PROTOCOL_VERSIONS, ServerSession, Window, server_options
@@ -63,8 +64,9 @@ RECORD_FIELDS = ("px", "py", "pvx", "pvy", "body", "bx", "by", "bvx", "bvy", "st
 STATUS_WORDS = {"GOAL": referee.GOAL, "OUT_OF_BOUNDS": referee.OUT_OF_BOUNDS, "OUT_OF_TIME": referee.OUT_OF_TIME}
 """The first word (before ``-``) of what HFORef says at a trial's end, by the env's status code."""
 
-Policy = Callable[[np.ndarray, np.ndarray], tuple[int, np.ndarray]]
-"""Decides an action ``(type, parameters (5,))`` from the observation ``(59,)`` and the exact state."""
+Policy = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+"""Decides actions ``(types (n,), parameters (n, 5))`` from observations ``(n, 59)`` and the exact states
+``(n, STATE_SIZE)``."""
 
 
 def hfo_options(task: HFOTask, noise: bool, seed: int) -> dict[str, object]:
@@ -131,7 +133,8 @@ class HFOServer:
             collided = window is not None and window.collided
             posted = window is not None and "post" in protocol.read_collisions(window.sense_body)
             features.observe(state[None], 0, self.types, 0, collided, posted, self.last_ok, self.c, self.k, obs, 0)
-            kind, params = policy(obs[0], state)
+            kinds, batch = policy(obs, state[None])
+            kind, params = int(kinds[0]), batch[0]
             clipped = np.clip(params, actions.PARAM_LOW[: len(params)], actions.PARAM_HIGH[: len(params)])
             first = int(actions.PARAM_STARTS[kind])
             b = clipped[first + 1] if actions.PARAM_SIZES[kind] > 1 else 0.0
@@ -206,48 +209,50 @@ def trial_record(trial: Trial, index: int, group: str, task: HFOTask, options: d
     }
 
 
-def hand_coded(task: HFOTask, agent: HandCodedOffense | None = None) -> Policy:
-    """The hand-coded agent (``agent``, default :class:`HandCodedOffense` for ``task``) as a :data:`Policy`."""
-    if agent is None:
-        agent = HandCodedOffense(task.distance_normaliser, task.tackle)
+def hand_coded(agent: HandCodedOffense) -> Policy:
+    """``agent`` as a :data:`Policy`."""
 
-    def policy(obs: np.ndarray, state: np.ndarray) -> tuple[int, np.ndarray]:
-        kinds, params = agent.act(obs)
-        return int(kinds[0]), params[0]
+    def policy(obs: np.ndarray, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return agent.act(obs)
 
     return policy
 
 
-def kick_out(task: HFOTask, target: tuple[float, float]) -> Policy:
-    """The hand-coded agent that, once the ball is kickable, kicks it with full power at ``target`` (m)."""
-    approach = hand_coded(task)
+def kick_at(agent: HandCodedOffense, target: tuple[float, float], shots_only: bool = False) -> Policy:
+    """``agent``, but each of its kicks (with ``shots_only`` each kick within its shooting distance of the goal
+    centre) goes with full power from the ball towards ``target`` (m)."""
     kick = int(actions.PARAM_STARTS[actions.KICK])
 
-    def policy(obs: np.ndarray, state: np.ndarray) -> tuple[int, np.ndarray]:
-        kind, params = approach(obs, state)
-        if kind == actions.KICK:
-            bearing = math.atan2(target[1] - state[physics.B_Y], target[0] - state[physics.B_X]) - state[physics.P_BODY]
-            params[kick], params[kick + 1] = 100.0, math.degrees(math.remainder(bearing, 2.0 * math.pi))
-        return kind, params
+    def policy(obs: np.ndarray, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        kinds, params = agent.act(obs)
+        px, py = states[:, physics.P_X], states[:, physics.P_Y]
+        kicking = kinds == actions.KICK
+        if shots_only:
+            kicking &= np.hypot(PITCH_HALF_LENGTH - px, py) < agent.shooting_distance
+        bx, by = states[:, physics.B_X], states[:, physics.B_Y]
+        bearing = np.arctan2(target[1] - by, target[0] - bx) - states[:, physics.P_BODY]
+        params[kicking, kick] = 100.0
+        params[kicking, kick + 1] = np.degrees(np.remainder(bearing + np.pi, 2.0 * np.pi) - np.pi)[kicking]
+        return kinds, params
 
     return policy
 
 
-def idle(obs: np.ndarray, state: np.ndarray) -> tuple[int, np.ndarray]:
+def idle(obs: np.ndarray, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Turn by nothing every cycle (the ball stays untouched)."""
-    return actions.TURN, np.zeros(actions.n_params(False))
+    return np.full(len(obs), actions.TURN, dtype=np.int64), np.zeros((len(obs), actions.n_params(False)))
 
 
 def record(binary: str | Path, path: Path, hand_coded_trials: int = 10) -> int:
     """Record the noise-free trials (module docstring, with ``hand_coded_trials`` of the hand-coded agent) into
     ``path``; returns their number."""
-    task, capped = HFOTask(), HFOTask(frames_per_trial=40)
+    task, capped, agent = HFOTask(), HFOTask(frames_per_trial=40), HandCodedOffense()
     plans: list[tuple[HFOTask, list[tuple[str, Policy]]]] = [
-        (task, [("hand_coded", hand_coded(task))] * hand_coded_trials
-         + [("kick_out_side", kick_out(task, (30.0, 40.0))), ("kick_out_back", kick_out(task, (-10.0, 0.0))),
-            ("kick_out_wide", kick_out(task, (60.0, 20.0))), ("kick_out_side", kick_out(task, (20.0, -40.0)))]
+        (task, [("hand_coded", hand_coded(agent))] * hand_coded_trials
+         + [("kick_out_side", kick_at(agent, (30.0, 40.0))), ("kick_out_back", kick_at(agent, (-10.0, 0.0))),
+            ("kick_out_wide", kick_at(agent, (60.0, 20.0))), ("kick_out_side", kick_at(agent, (20.0, -40.0)))]
          + [("untouched", idle)] * 2),
-        (capped, [("capped", hand_coded(capped))] * 2),
+        (capped, [("capped", hand_coded(agent))] * 2),
     ]  # fmt: skip
     index = 0
     with path.open("w") as out:
@@ -307,10 +312,8 @@ class Outcomes:
         return goals
 
 
-def server_trials(
-    binary: str | Path, n_trials: int, seed: int, task: HFOTask, agent: HandCodedOffense
-) -> tuple[np.ndarray, Outcomes]:
-    """``n_trials`` trials of ``agent`` on the server with its noise on: start states ``(n, STATE_SIZE)`` and
+def server_trials(binary: str | Path, n_trials: int, seed: int, task: HFOTask, policy: Policy) -> tuple[np.ndarray, Outcomes]:
+    """``n_trials`` trials of ``policy`` on the server with its noise on: start states ``(n, STATE_SIZE)`` and
     outcomes."""
     options = hfo_options(task, noise=True, seed=seed)
     starts, status, cycles = physics.new_state(n_trials), np.zeros(n_trials, np.int64), np.zeros(n_trials, np.int64)
@@ -318,7 +321,6 @@ def server_trials(
         player, trainer = process.endpoints()
         server = HFOServer(ServerSession(player, trainer, make_profile(PROFILE), WORLD_SEED, noise=True), task)
         server.open()
-        policy = hand_coded(task, agent)
         for j in range(n_trials):
             trial = server.play(policy)
             starts[j], status[j], cycles[j] = trial.start, trial.status, trial.cycles
@@ -327,14 +329,14 @@ def server_trials(
     return starts, Outcomes(status, cycles)
 
 
-def env_trials(starts: np.ndarray, seed: int, task: HFOTask, agent: HandCodedOffense) -> Outcomes:
-    """``agent``'s trials in the env (v15 with noise) from the given start states."""
+def env_trials(starts: np.ndarray, seed: int, task: HFOTask, policy: Policy) -> Outcomes:
+    """``policy``'s trials in the env (v15 with noise) from the given start states."""
     n = len(starts)
     lanes = HFOLanes(n, make_profile(PROFILE), task, np.random.default_rng(seed))
     obs = lanes.place(np.arange(n), starts)
     status, cycles = np.zeros(n, np.int64), np.zeros(n, np.int64)
     while not status.all():
-        kinds, params = agent.act(obs)
+        kinds, params = policy(obs, lanes.state)
         step = lanes.step(kinds, params, autoreset=False)
         ended = (status == referee.IN_GAME) & (step.status != referee.IN_GAME)
         status[ended], cycles[ended] = step.status[ended], lanes.steps[ended]
@@ -364,19 +366,24 @@ def paired_test(differences: np.ndarray) -> tuple[float, float]:
     return t, math.erfc(abs(t) / math.sqrt(2.0))
 
 
-def matched_trials(binary: str | Path, n_trials: int, seed: int, shooting_distance: float = 25.0) -> tuple[Outcomes, Outcomes]:
+def matched_trials(
+    binary: str | Path, n_trials: int, seed: int, shooting_distance: float = 25.0, aim: float | None = None
+) -> tuple[Outcomes, Outcomes]:
     """``(server, env)`` outcomes of ``n_trials`` trials of :class:`HandCodedOffense` (shooting from
-    ``shooting_distance``) from the server referee's start states (``server::random_seed = seed``), both with noise
-    (the env's from ``numpy.random.default_rng(seed)``)."""
+    ``shooting_distance``; with ``aim`` every shot goes at (52.5, aim) instead of the goal centre) from the server
+    referee's start states (``server::random_seed = seed``), both with noise (the env's from
+    ``numpy.random.default_rng(seed)``)."""
     task = HFOTask()
     agent = HandCodedOffense(task.distance_normaliser, task.tackle, shooting_distance=shooting_distance)
-    starts, real = server_trials(binary, n_trials, seed, task, agent)
-    return real, env_trials(starts, seed, task, agent)
+    policy = hand_coded(agent) if aim is None else kick_at(agent, (PITCH_HALF_LENGTH, aim), shots_only=True)
+    starts, real = server_trials(binary, n_trials, seed, task, policy)
+    return real, env_trials(starts, seed, task, policy)
 
 
-def compare(binary: str | Path, n_trials: int, seed: int, shooting_distance: float = 25.0) -> str:
+def compare(binary: str | Path, n_trials: int, seed: int, shooting_distance: float = 25.0, aim: float | None = None) -> str:
     """The figures of :func:`matched_trials` as text."""
-    real, sim = matched_trials(binary, n_trials, seed, shooting_distance)
+    real, sim = matched_trials(binary, n_trials, seed, shooting_distance, aim)
+    aimed = "the goal centre" if aim is None else f"(52.5, {aim:g})"
     z, p = two_proportion_test(real.goals, sim.goals)
     both = real.goals & sim.goals
     only_real, only_sim = int((real.goals & ~sim.goals).sum()), int((sim.goals & ~real.goals).sum())
@@ -384,8 +391,8 @@ def compare(binary: str | Path, n_trials: int, seed: int, shooting_distance: flo
     pairs = (real.cycles[both] - sim.cycles[both]).astype(float)
     t_pairs, p_pairs = paired_test(pairs)
     lines = [
-        f"{n_trials} matched trials (server seed {seed}): the hand-coded agent shooting from {shooting_distance:g} m, "
-        "HFO 1v0, noise on",
+        f"{n_trials} matched trials (server seed {seed}): the hand-coded agent shooting from {shooting_distance:g} m "
+        f"at {aimed}, HFO 1v0, noise on",
         f"P(goal)   server {real.goals.mean():.4f}   env {sim.goals.mean():.4f}   difference "
         f"{real.goals.mean() - sim.goals.mean():+.4f}   two-proportion z {z:+.2f}, p {p:.3f}",
         f"          goals in both {int(both.sum())}, only on the server {only_real}, only in the env {only_sim}",
@@ -409,6 +416,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     matched.add_argument("--trials", type=int, default=1000)
     matched.add_argument("--seed", type=int, default=1, help="the server's random_seed and the env's generator seed")
     matched.add_argument("--shooting-distance", type=float, default=25.0, help="the agent's (m; default: %(default)s)")
+    matched.add_argument("--aim", type=float, default=None, help="shoot at (52.5, AIM) m (default: the goal centre)")
     args = parser.parse_args(argv)
     binary = os.environ.get(SERVER_VARIABLE)
     if not binary:
@@ -417,7 +425,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "record":
         print(f"recorded {record(binary, args.out)} trials into {args.out}")
     else:
-        print(compare(binary, args.trials, args.seed, args.shooting_distance))
+        print(compare(binary, args.trials, args.seed, args.shooting_distance, args.aim))
     return 0
 
 
