@@ -624,15 +624,16 @@ def test_live_server_trials_replay_in_the_env(tmp_path):
 @pytest.mark.skipif(HFO_SERVER is None, reason=f"no HFO rcssserver: set {rcss.SERVER_VARIABLE} (data/README.md)")
 def test_matched_trials_on_the_server_and_in_the_env_agree():
     """200 trials from the server referee's starts, both with noise (2,000 agree within 0.001 and 0.04 cycles)."""
-    real, sim = rcss.matched_trials(HFO_SERVER, 200, seed=3)
+    starts, real, sim = rcss.matched_trials(HFO_SERVER, 200, seed=3)
     assert abs(real.goals.mean() - sim.goals.mean()) <= 0.03 and real.goals.mean() >= 0.95
     both = real.goals & sim.goals
     assert abs((real.cycles[both] - sim.cycles[both]).mean()) < 1.5  # a pair differs by ~4.3 cycles (sd): 5 se
+    assert all(p > 0.001 for *_, p in rcss.start_tests(starts, 3, HFOTask()).values())
 
 
 @pytest.mark.skipif(HFO_SERVER is None, reason=f"no HFO rcssserver: set {rcss.SERVER_VARIABLE} (data/README.md)")
 def test_matched_shots_at_the_post_miss_as_often_on_the_server_as_in_the_env():
     """Shots from 35 m at (52.5, 6.5), 0.5 m inside the post: the kick noise decides (P(goal) ~0.84); 400 trials
     agree within 0.08 (3 standard errors of the difference)."""
-    real, sim = rcss.matched_trials(HFO_SERVER, 400, seed=4, shooting_distance=35.0, aim=6.5)
+    _, real, sim = rcss.matched_trials(HFO_SERVER, 400, seed=4, shooting_distance=35.0, aim=6.5)
     assert 0.6 < real.goals.mean() < 0.95 and abs(real.goals.mean() - sim.goals.mean()) < 0.08

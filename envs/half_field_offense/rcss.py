@@ -366,23 +366,51 @@ def paired_test(differences: np.ndarray) -> tuple[float, float]:
     return t, math.erfc(abs(t) / math.sqrt(2.0))
 
 
+def ks_test(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    """``(D, p)`` of the two-sample Kolmogorov-Smirnov test (asymptotic p, Stephens' correction); both samples are
+    rounded to 6 significant digits first (as the server prints them) so that values clipped to a bound tie."""
+    a, b = (np.sort(np.array([float(f"{v:.6g}") for v in x])) for x in (a, b))
+    grid = np.concatenate((a, b))
+    d = float(np.abs(np.searchsorted(a, grid, "right") / len(a) - np.searchsorted(b, grid, "right") / len(b)).max())
+    n = math.sqrt(len(a) * len(b) / (len(a) + len(b)))
+    lam = (n + 0.12 + 0.11 / n) * d
+    p = 2.0 * sum((-1) ** (k - 1) * math.exp(-2.0 * k * k * lam * lam) for k in range(1, 101))
+    return d, min(max(p, 0.0), 1.0)
+
+
+def start_tests(starts: np.ndarray, seed: int, task: HFOTask) -> dict[str, tuple[float, float, float, float]]:
+    """The server referee's start positions against as many starts of the env's referee (``HFOLanes.reset``): per
+    coordinate ``(server mean, env mean, KS D, p)`` of a two-sample KS test."""
+    lanes = HFOLanes(len(starts), make_profile(PROFILE), task, np.random.default_rng(seed))
+    lanes.reset(np.arange(len(starts)))
+    names = {"ball x": physics.B_X, "ball y": physics.B_Y, "player x": physics.P_X, "player y": physics.P_Y}
+    return {
+        name: (
+            float(starts[:, column].mean()),
+            float(lanes.state[:, column].mean()),
+            *ks_test(starts[:, column], lanes.state[:, column]),
+        )
+        for name, column in names.items()
+    }
+
+
 def matched_trials(
     binary: str | Path, n_trials: int, seed: int, shooting_distance: float = 25.0, aim: float | None = None
-) -> tuple[Outcomes, Outcomes]:
-    """``(server, env)`` outcomes of ``n_trials`` trials of :class:`HandCodedOffense` (shooting from
-    ``shooting_distance``; with ``aim`` every shot goes at (52.5, aim) instead of the goal centre) from the server
-    referee's start states (``server::random_seed = seed``), both with noise (the env's from
-    ``numpy.random.default_rng(seed)``)."""
+) -> tuple[np.ndarray, Outcomes, Outcomes]:
+    """The start states ``(n, STATE_SIZE)`` and the ``(server, env)`` outcomes of ``n_trials`` trials of
+    :class:`HandCodedOffense` (shooting from ``shooting_distance``; with ``aim`` every shot goes at (52.5, aim)
+    instead of the goal centre) from the server referee's start states (``server::random_seed = seed``), both with
+    noise (the env's from ``numpy.random.default_rng(seed)``)."""
     task = HFOTask()
     agent = HandCodedOffense(task.distance_normaliser, task.tackle, shooting_distance=shooting_distance)
     policy = hand_coded(agent) if aim is None else kick_at(agent, (PITCH_HALF_LENGTH, aim), shots_only=True)
     starts, real = server_trials(binary, n_trials, seed, task, policy)
-    return real, env_trials(starts, seed, task, policy)
+    return starts, real, env_trials(starts, seed, task, policy)
 
 
 def compare(binary: str | Path, n_trials: int, seed: int, shooting_distance: float = 25.0, aim: float | None = None) -> str:
     """The figures of :func:`matched_trials` as text."""
-    real, sim = matched_trials(binary, n_trials, seed, shooting_distance, aim)
+    starts, real, sim = matched_trials(binary, n_trials, seed, shooting_distance, aim)
     aimed = "the goal centre" if aim is None else f"(52.5, {aim:g})"
     z, p = two_proportion_test(real.goals, sim.goals)
     both = real.goals & sim.goals
@@ -404,6 +432,8 @@ def compare(binary: str | Path, n_trials: int, seed: int, shooting_distance: flo
     for name, outcomes in (("server", real), ("env", sim)):
         counts = {referee.STATUS_NAMES[c]: int((outcomes.status == c).sum()) for c in range(1, len(referee.STATUS_NAMES))}
         lines.append(f"statuses {name}: {counts}")
+    for name, (mean_real, mean_sim, d, p_start) in start_tests(starts, seed, HFOTask()).items():
+        lines.append(f"start {name}: mean server {mean_real:.3f} env {mean_sim:.3f}, KS D {d:.4f}, p {p_start:.3f}")
     return "\n".join(lines)
 
 
