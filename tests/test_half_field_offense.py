@@ -3,6 +3,7 @@ transforms, every reward term, every end condition, the start distribution, dete
 single env, the hand-coded agent and a short learning run."""
 
 import math
+import os
 
 import gymnasium as gym
 import numpy as np
@@ -11,7 +12,7 @@ from gymnasium.error import ResetNeeded
 from gymnasium.utils.env_checker import check_env
 
 import half_field_offense
-from half_field_offense import actions, features, referee, reward
+from half_field_offense import actions, features, rcss, referee, reward
 from half_field_offense.agent import HandCodedOffense
 from half_field_offense.evaluation import evaluate_offense
 from half_field_offense.lanes import HFOLanes
@@ -543,3 +544,97 @@ def test_the_command_line_trains_on_half_field_offense(tmp_path, capsys):
     assert main([*argv, "--eval-episodes", "3", "--out", str(tmp_path / "run")]) == 0
     out = capsys.readouterr().out
     assert "HalfFieldOffense-v0" in out and (tmp_path / "run" / "model.zip").exists()
+
+
+# --- recorded real-server trials (HFO's rcssserver 15.2.2 fork, its referee; data/README.md) ----------------------------
+
+RECORDED_TRIALS = rcss.read_trials()
+PRINTED_COLUMNS = [physics.STATE_FIELDS.index(name) for name in rcss.RECORD_FIELDS]
+
+
+def test_the_recording_covers_every_end_and_the_cap():
+    ends = {(trial["group"], trial["status"]) for trial in RECORDED_TRIALS}
+    assert {("hand_coded", "GOAL"), ("untouched", "OUT_OF_TIME"), ("capped", "OUT_OF_TIME")} <= ends
+    assert {status for group, status in ends if group.startswith("kick_out")} == {"OUT_OF_BOUNDS"}
+    assert all(len(trial["states"]) == len(trial["actions"]) == trial["cycles"] for trial in RECORDED_TRIALS)
+
+
+@pytest.mark.parametrize("trial", RECORDED_TRIALS, ids=[trial["id"] for trial in RECORDED_TRIALS])
+def test_recorded_server_trials_end_as_its_referee_called_them(trial):
+    """Open loop from the referee's placement: the same status at the same cycle, IN_GAME before; the states stay
+    within 0.01 m and 0.01 m/cycle of the server's (the printed start's rounding grows through kicks)."""
+    states, codes, recorded = rcss.replay(trial, resync=False)
+    status = referee.STATUS_NAMES.index(trial["status"])
+    assert codes == [referee.IN_GAME] * (trial["cycles"] - 1) + [status]
+    moving = [physics.P_X, physics.P_Y, physics.P_VX, physics.P_VY, physics.B_X, physics.B_Y, physics.B_VX, physics.B_VY]
+    np.testing.assert_allclose(states[:, moving], recorded[:, moving], rtol=0, atol=0.01)
+
+
+@pytest.mark.parametrize("trial", RECORDED_TRIALS, ids=[trial["id"] for trial in RECORDED_TRIALS])
+def test_every_recorded_server_cycle_replays_within_the_printed_precision(trial):
+    """Each cycle stepped from the recorded state before it (data/README.md gives the tolerance)."""
+    states, _, recorded = rcss.replay(trial, resync=True)
+    np.testing.assert_allclose(states[:, PRINTED_COLUMNS], recorded[:, PRINTED_COLUMNS], rtol=1e-5, atol=1e-4)
+
+
+@pytest.mark.parametrize(
+    "trial", [t for t in RECORDED_TRIALS if t["group"] in ("hand_coded", "capped")], ids=lambda trial: trial["id"]
+)
+def test_the_hand_coded_agent_plays_the_recorded_server_trials_alike_in_the_env(trial):
+    """Closed loop (features of the env's own state): the same action every cycle and the same end."""
+    lanes = HFOLanes(1, without_noise(make_profile("v15")), HFOTask(**trial["task"]), np.random.default_rng(0))
+    obs = lanes.place(np.array([0]), rcss.read_state(trial["start"])[None])
+    agent, kinds, status = HandCodedOffense(), [], referee.IN_GAME
+    while status == referee.IN_GAME:
+        kind, params = agent.act(obs)
+        step = lanes.step(kind, params, autoreset=False)
+        obs, status = step.observations, step.status[0]
+        kinds.append(int(kind[0]))
+    assert kinds == [action[0] for action in trial["actions"]] and referee.STATUS_NAMES[status] == trial["status"]
+
+
+def test_place_starts_a_trial_from_a_given_state_as_it_is():
+    lanes = quiet_lanes(2)
+    start = rcss.read_state(RECORDED_TRIALS[0]["start"])
+    start[physics.S_STAMINA] = 5000.0  # not recovered
+    obs = lanes.place(np.array([1]), start[None])
+    np.testing.assert_array_equal(lanes.state[1], start)
+    assert lanes.steps[1] == 0 and lanes.untouched[1] == 0 and not lanes.holds[1]
+    np.testing.assert_array_equal(lanes.previous_ball[1], start[[physics.B_X, physics.B_Y]])
+    expected = np.empty((1, features.N_FEATURES), dtype=np.float32)
+    features.observe(lanes.state, 1, lanes.types, 1, False, False, lanes.last_action_ok[1], lanes.c, lanes.k, expected, 0)
+    np.testing.assert_array_equal(obs, expected)
+    with pytest.raises(ValueError, match="start_states"):
+        lanes.place(np.array([0]), start[None, :5])
+    with pytest.raises(ValueError, match="distinct indices"):
+        lanes.place(np.array([0, 0]), np.stack([start, start]))
+
+
+HFO_SERVER = os.environ.get(rcss.SERVER_VARIABLE)
+
+
+@pytest.mark.skipif(HFO_SERVER is None, reason=f"no HFO rcssserver: set {rcss.SERVER_VARIABLE} (data/README.md)")
+def test_live_server_trials_replay_in_the_env(tmp_path):
+    path = tmp_path / "trials.jsonl"
+    assert rcss.record(HFO_SERVER, path, hand_coded_trials=2) == 10
+    for trial in rcss.read_trials(path):
+        _, codes, _ = rcss.replay(trial, resync=False)
+        assert referee.STATUS_NAMES[codes[-1]] == trial["status"] and codes.index(codes[-1]) == trial["cycles"] - 1
+
+
+@pytest.mark.skipif(HFO_SERVER is None, reason=f"no HFO rcssserver: set {rcss.SERVER_VARIABLE} (data/README.md)")
+def test_matched_trials_on_the_server_and_in_the_env_agree():
+    """200 trials from the server referee's starts, both with noise (2,000 agree within 0.001 and 0.04 cycles)."""
+    starts, real, sim = rcss.matched_trials(HFO_SERVER, 200, seed=3)
+    assert abs(real.goals.mean() - sim.goals.mean()) <= 0.03 and real.goals.mean() >= 0.95
+    both = real.goals & sim.goals
+    assert abs((real.cycles[both] - sim.cycles[both]).mean()) < 1.5  # a pair differs by ~4.3 cycles (sd): 5 se
+    assert all(p > 0.001 for *_, p in rcss.start_tests(starts, 3, HFOTask()).values())
+
+
+@pytest.mark.skipif(HFO_SERVER is None, reason=f"no HFO rcssserver: set {rcss.SERVER_VARIABLE} (data/README.md)")
+def test_matched_shots_at_the_post_miss_as_often_on_the_server_as_in_the_env():
+    """Shots from 35 m at (52.5, 6.5), 0.5 m inside the post: the kick noise decides (P(goal) ~0.84); 400 trials
+    agree within 0.08 (3 standard errors of the difference)."""
+    _, real, sim = rcss.matched_trials(HFO_SERVER, 400, seed=4, shooting_distance=35.0, aim=6.5)
+    assert 0.6 < real.goals.mean() < 0.95 and abs(real.goals.mean() - sim.goals.mean()) < 0.08

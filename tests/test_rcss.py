@@ -187,14 +187,23 @@ def test_command_numbers_read_back_exactly_and_never_use_an_exponent(value: floa
     assert float(text) == value and "e" not in text.lower()
 
 
+def test_the_referee_is_heard_and_other_speakers_are_not() -> None:
+    assert protocol.read_referee("(hear 205 referee OUT_OF_TIME)") == "OUT_OF_TIME"
+    assert protocol.read_referee("(hear 12 referee GOAL-1)") == "GOAL-1"
+    assert protocol.read_referee('(hear 12 30 "pass")') is None
+    assert protocol.read_referee("(hear 12 online_coach_left (info))") is None
+
+
 def test_commands_are_formatted_as_the_server_reads_them() -> None:
     assert protocol.player_command(physics.CMD_DASH, 100.0, -20.0) == "(dash 100 -20)"
     assert protocol.player_command(physics.CMD_KICK, 37.5, 1e-7) == "(kick 37.5 0.0000001)"
     assert protocol.move_player("PITCH", 1, 0.0, 0.0, 0.0, -0.25, 0.125) == "(move (player PITCH 1) 0 0 0 -0.25 0.125)"
     assert protocol.move_ball(0.5, -1.0) == "(move (ball) 0.5 -1 0 0 0)"
     assert protocol.change_player_type("PITCH", 1, 7) == "(change_player_type PITCH 1 7)"
-    with pytest.raises(ValueError, match="dash or kick"):
-        protocol.player_command(physics.CMD_TURN, 30.0, 0.0)
+    assert protocol.player_command(physics.CMD_TURN, -30.5, 0.0) == "(turn -30.5)"
+    assert protocol.player_command(physics.CMD_TACKLE, 0.0, 45.0) == "(tackle 45)"
+    with pytest.raises(ValueError, match="dash, kick, turn or tackle"):
+        protocol.player_command(physics.CMD_NONE, 30.0, 0.0)
     with pytest.raises(ValueError, match="finite"):
         protocol.number(math.nan)
 

@@ -89,15 +89,33 @@ class HFOLanes:
 
         :raises ValueError: for indices that are not distinct integers in range; nothing changes.
         """
+        index = self._checked_lanes(lanes)
+        obs = np.empty((len(index), features.N_FEATURES), dtype=np.float32)
+        self._start(index, obs, by_row=True)
+        return obs
+
+    def place(self, lanes: np.ndarray, start_states: np.ndarray) -> np.ndarray:
+        """Start a trial in each of ``lanes`` from a given start state (row ``r`` for ``lanes[r]``), as it is:
+        nothing is drawn and the player is not recovered (a replay of a server's trial). Returns the observations
+        ``(len(lanes), 59)``.
+
+        :raises ValueError: for indices that are not distinct integers in range, or states of another shape.
+        """
+        index = self._checked_lanes(lanes)
+        states = physics.input_array("start_states", start_states, (len(index), physics.STATE_SIZE))
+        self.state[index] = states
+        obs = np.empty((len(index), features.N_FEATURES), dtype=np.float32)
+        _begin_lanes(*self._step_arrays[:11], index, obs)
+        return obs
+
+    def _checked_lanes(self, lanes: np.ndarray) -> np.ndarray:
         index = np.asarray(lanes)
         if index.ndim != 1 or index.dtype.kind not in "iu":
             raise ValueError(f"lanes must be a 1-D integer array, got {index!r:.200}")
         index = index.astype(np.int64)
         if len(index) and (index.min() < 0 or index.max() >= self.n_lanes or len(np.unique(index)) != len(index)):
             raise ValueError(f"lanes must be distinct indices in 0..{self.n_lanes - 1}, got {index!r:.200}")
-        obs = np.empty((len(index), features.N_FEATURES), dtype=np.float32)
-        self._start(index, obs, by_row=True)
-        return obs
+        return index
 
     def _start(self, lanes: np.ndarray, obs: np.ndarray, by_row: bool) -> None:
         uniforms = self.rng.random((len(lanes), referee.N_START_UNIFORMS))
@@ -172,8 +190,20 @@ def _start_lanes(
     """Start a trial in each of ``lanes`` from row ``r`` of ``uniforms`` and write its first observation to
     ``obs[r]`` (``by_row``) or ``obs[lane]``."""
     for r in range(lanes.shape[0]):
+        referee.place(state, lanes[r], types, lanes[r], uniforms, r, c, k)
+    _begin_lanes(
+        state, types, steps, untouched, holds, previous_ball, last_action_ok, memory, returns, k, c, lanes, obs, by_row
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def _begin_lanes(
+    state, types, steps, untouched, holds, previous_ball, last_action_ok, memory, returns, k, c, lanes, obs, by_row=True
+) -> None:
+    """Begin the trial whose start state ``lanes[r]`` holds: counts, memory and the referee's last ball reset, its
+    first observation written to ``obs[r]`` (``by_row``) or ``obs[lane]``."""
+    for r in range(lanes.shape[0]):
         i = lanes[r]
-        referee.place(state, i, types, i, uniforms, r, c, k)
         steps[i], untouched[i], holds[i], returns[i] = 0, 0, False, 0.0
         previous_ball[i, 0], previous_ball[i, 1] = state[i, physics.B_X], state[i, physics.B_Y]
         memory[i, :] = 0.0

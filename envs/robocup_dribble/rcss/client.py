@@ -13,8 +13,9 @@ through the env's skills (:func:`robocup_dribble.skills.command_lane`), and the 
 :class:`robocup_dribble.evaluation.DribbleReport`, so it compares directly with
 :func:`robocup_dribble.evaluation.evaluate_episodes` on the same episodes (:func:`server_episodes`).
 
-Only the ``"v19"`` profile can be checked this way: no rcssserver of the v11 era (2007) can be obtained and built
-today, so :func:`checked_profile` refuses ``"v11"`` with that reason.
+The ``"v19"`` profile is played on rcssserver 19 (protocol 19), ``"v15"`` on HFO's rcssserver 15.2.2 fork (protocol
+15: the fork refuses 19); no rcssserver of the v11 era (2007) can be obtained and built today, so
+:func:`checked_profile` refuses ``"v11"`` with that reason.
 """
 
 from __future__ import annotations
@@ -38,6 +39,11 @@ from robocup_dribble.rcss.server import Endpoint, ServerError
 from robocup_dribble.vec_env import parse_actions
 
 PROTOCOL_VERSION = 19
+PROTOCOL_VERSIONS = {"v19": PROTOCOL_VERSION, "v15": 15}
+"""The client protocol version each checkable profile's server speaks."""
+HETEROGENEOUS_CHECKED = ("v19",)
+"""Profiles whose server's heterogeneous player types :func:`generate_player_types` reproduces; for the others
+(rcssserver 15.x draws them another way) only the default type 0 is checked, and only it may be played."""
 TEAM = "PITCH"
 UNUM = 1
 PARK_BALL = (0.0, -30.0)
@@ -50,25 +56,26 @@ _MESSAGE_NAMES = {"max_power": "maxpower", "min_power": "minpower", "max_moment"
 
 
 class Window(NamedTuple):
-    """What the player got in one think window: its fullstate, the collision flag and text of its sense_body, and
-    the text of its see (None in a cycle without one)."""
+    """What the player got in one think window: its fullstate, the collision flag and text of its sense_body, the
+    text of its see (None in a cycle without one) and what it heard the referee say, in order."""
 
     fullstate: protocol.FullState
     collided: bool
     sense_body: str
     see: str | None
+    referee: tuple[str, ...] = ()
 
 
 def checked_profile(profile: str | ServerProfile) -> ServerProfile:
-    """The profile a real server run uses: only ``"v19"`` (or a profile named so).
+    """The profile a real server run uses: ``"v19"`` or ``"v15"`` (or a profile named so).
 
     :raises ValueError: for ``"v11"``: its server (2007) cannot be obtained, so it cannot be checked on a real one.
     """
     server_profile = make_profile(profile)
-    if server_profile.name != "v19":
+    if server_profile.name not in PROTOCOL_VERSIONS:
         raise ValueError(
-            f"profile {server_profile.name!r} cannot be played on a real server: only rcssserver 19 can be built and "
-            "checked (no rcssserver of the v11 era, 2007, is obtainable); use profile 'v19'"
+            f"profile {server_profile.name!r} cannot be played on a real server: only rcssserver 19 and HFO's 15.2.2 "
+            "fork can be built and checked (no rcssserver of the v11 era, 2007, is obtainable); use profile 'v19' or 'v15'"
         )
     return server_profile
 
@@ -158,7 +165,8 @@ def check_server(
     expected_types = generate_player_types(profile, world_seed)
     if len(player_types) != len(expected_types):
         problems.append(f"{len(player_types)} player types, the profile has {len(expected_types)}")
-    for type_id, (message, expected_type) in enumerate(zip(player_types, expected_types, strict=False)):
+    checked = len(expected_types) if profile.name in HETEROGENEOUS_CHECKED else 1
+    for type_id, (message, expected_type) in enumerate(zip(player_types[:checked], expected_types, strict=False)):
         if message.get("id") != type_id:
             problems.append(f"player_type number {type_id} has id {message.get('id')!r}")
         for name, value in zip(TYPE_FIELDS, expected_type, strict=True):
@@ -205,11 +213,12 @@ class ServerSession:
     def open(self) -> None:
         """Connect both clients, check the server (:func:`check_server`), switch to play_on and wait for the first
         think window."""
-        self.trainer.send(f"(init (version {PROTOCOL_VERSION}))")
+        version = PROTOCOL_VERSIONS[self.profile.name]
+        self.trainer.send(f"(init (version {version}))")
         reply = self._trainer_reply(self.trainer.receive())
         if reply != "(init ok)":
             raise ServerError(f"the trainer's init was answered {reply[:200]!r}, not (init ok)")
-        self.player.send(f"(init {TEAM} (version {PROTOCOL_VERSION}))")
+        self.player.send(f"(init {TEAM} (version {version}))")
         reply = self._player_message(self.player.receive())
         if not reply.startswith(f"(init l {UNUM} "):
             raise ServerError(f"the player's init was answered {reply[:200]!r}, not (init l {UNUM} ...): is the team full?")
@@ -314,6 +323,8 @@ class ServerSession:
     def place(self, type_id: int, start: np.ndarray) -> None:
         """Set an episode up in the current think window: type ``type_id``, recovery, ball parked, player and ball
         placed as in ``start`` ``(STATE_SIZE,)``; the trainer's look must confirm the placement."""
+        if type_id != 0 and self.profile.name not in HETEROGENEOUS_CHECKED:
+            raise ValueError(f"profile {self.profile.name!r} plays only the default type 0 on a real server, not {type_id}")
         if type_id != self.player_type:
             self._trainer_command(protocol.change_player_type(TEAM, UNUM, type_id))
             self.player_type = type_id
@@ -398,9 +409,12 @@ class ServerSession:
         fullstate: protocol.FullState | None = None
         sense_body: str | None = None
         see: str | None = None
+        referee: list[str] = []
         while (message := self._player_message(self.player.receive())) != "(think)":
             head = protocol.kind(message)
-            if head == "fullstate":
+            if head == "hear" and (said := protocol.read_referee(message)) is not None:
+                referee.append(said)
+            elif head == "fullstate":
                 fullstate = protocol.read_fullstate(message, "l", UNUM)
             elif head == "sense_body":
                 sense_body = message
@@ -408,11 +422,12 @@ class ServerSession:
                 see = message
         if fullstate is None or sense_body is None:
             raise ServerError("a think window without the player's fullstate and sense_body (is fullstate_l on?)")
-        return Window(fullstate, protocol.read_collision(sense_body), sense_body, see)
+        return Window(fullstate, protocol.read_collision(sense_body), sense_body, see, tuple(referee))
 
 
 __all__ = [
     "PROTOCOL_VERSION",
+    "PROTOCOL_VERSIONS",
     "TEAM",
     "ProtocolError",
     "ServerEpisodes",

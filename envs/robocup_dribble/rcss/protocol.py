@@ -137,6 +137,14 @@ def read_fullstate(message: str, side: str = "l", unum: int = 1) -> FullState:
     return FullState(int(_numbers([tree[1]], "time")[0]), play_mode, player_type, state)
 
 
+def read_referee(message: str) -> str | None:
+    """What the referee said in a ``(hear TIME referee MESSAGE)``, or None for what another speaker said."""
+    words = message.strip().lstrip("(").rstrip(")").split()
+    if len(words) != 4 or words[0] != "hear":
+        return None
+    return words[3] if words[2] == "referee" else None
+
+
 def read_look(message: str, team: str, unum: int) -> np.ndarray:
     """Player ``team unum`` and ball in the trainer's ``(ok look TIME ...)``: ``[px, py, pvx, pvy, bx, by, bvx, bvy]``.
 
@@ -207,14 +215,17 @@ def number(value: float) -> str:
 
 
 def player_command(command_kind: int, power: float, direction: float) -> str:
-    """The player command of a skill's ``(physics.CMD_* kind, power, direction)``: ``(dash P D)`` or ``(kick P D)``."""
+    """The player command of a ``(physics.CMD_* kind, power or moment, direction)``: ``(dash P D)``, ``(kick P D)``,
+    ``(turn M)`` or ``(tackle D)``."""
     if command_kind == physics.CMD_DASH:
         return f"(dash {number(power)} {number(direction)})"
     if command_kind == physics.CMD_KICK:
         return f"(kick {number(power)} {number(direction)})"
-    raise ValueError(
-        f"the skills give dash or kick commands (kinds {physics.CMD_DASH}, {physics.CMD_KICK}), got {command_kind!r}"
-    )
+    if command_kind == physics.CMD_TURN:
+        return f"(turn {number(power)})"
+    if command_kind == physics.CMD_TACKLE:
+        return f"(tackle {number(direction)})"
+    raise ValueError(f"a command is a dash, kick, turn or tackle (kinds 1 to 4), got {command_kind!r}")
 
 
 def move_player(team: str, unum: int, x: float, y: float, body_deg: float, vx: float, vy: float) -> str:
