@@ -27,7 +27,7 @@ def clip_grad_norm(grads: Sequence[th.Tensor], max_norm: float) -> th.Tensor:
     (torch's ``clip_grad_norm_`` on the gradients themselves).
     """
     with th.no_grad():
-        total = th.linalg.vector_norm(th.stack(th._foreach_norm(list(grads), 2.0)), 2.0)
+        total: th.Tensor = th.linalg.vector_norm(th.stack(th._foreach_norm(list(grads), 2.0)), 2.0)
         th._foreach_mul_(list(grads), th.clamp(max_norm / (total + 1e-6), max=1.0))
     return total
 

@@ -97,6 +97,7 @@ class ParamActor(nn.Module):
         nn.init.normal_(last.weight, std=1e-4)
         nn.init.zeros_(last.bias)
         offset = np.arctanh(np.clip(initial_params, -0.999, 0.999)) if squash else initial_params
+        self.offset: th.Tensor
         self.register_buffer("offset", th.as_tensor(offset, dtype=th.float32))
 
     def forward(self, features: th.Tensor) -> th.Tensor:
