@@ -135,7 +135,10 @@ class HybridDistribution(Distribution):
 
     def sample(self) -> th.Tensor:
         """Packed actions ``(n, 1 + n_params)``: ``k ~ p(.|s)`` and every type's parameters ``~ N(mu, sigma)``."""
-        types = th.multinomial(self.type_probs, 1, True).squeeze(1)
+        # th.multinomial's draw of one sample, argmax(p / q) with q ~ Exp(1) (the same generator calls, so the same
+        # types), without its checks of the probabilities, which synchronise with the device twice per call.
+        probs = self.type_probs
+        types = (probs / th.empty_like(probs).exponential_()).argmax(dim=-1)
         params = self.mean + self.log_std.exp() * th.randn_like(self.mean)
         return th.cat((types.unsqueeze(1).to(params.dtype), params), dim=1)
 

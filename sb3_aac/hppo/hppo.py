@@ -239,7 +239,9 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
         while n_steps < n_rollout_steps:
             with th.no_grad():
                 packed_t, values, type_log_prob, param_log_prob = self.policy(obs_as_tensor(self._last_obs, self.device))
-            packed = packed_t.cpu().numpy()
+            packed, type_log_probs = packed_t.cpu().numpy(), type_log_prob.cpu().numpy()
+            if not np.isfinite(type_log_probs).all():
+                self._raise_divergence("the policy's output (the type logits)")
             if not np.isfinite(packed).all():
                 self._raise_divergence("the policy's output (the parameter means or standard deviations)")
             k, params = packed[:, 0].astype(np.int64), np.clip(packed[:, 1:], -1.0, 1.0)
@@ -271,7 +273,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
                 rewards,
                 self._last_episode_starts,  # type: ignore[arg-type]
                 values.cpu().numpy(),
-                type_log_prob.cpu().numpy(),
+                type_log_probs,
                 param_log_prob.cpu().numpy(),
             )
             self._last_obs = new_obs
