@@ -12,6 +12,9 @@ The measurements are interleaved and repeated (``--repeats``); the medians are p
 shared machine hits both sides alike.
 
 Usage: ``python -m benchmarks.speed.hppo_speed [--env RoboCupDribblePaper-v0] [--steps 8192] [--repeats 3]``
+
+Note, for comparison: before the fast rollouts (main at 337ec70; AMD EPYC, torch 2.13 CPU, load average 0.4), HybridPPO
+with this rollout shape on one env (``--n-envs 1``) gave 1219 env steps/s.
 """
 
 from __future__ import annotations

@@ -11,6 +11,9 @@ figures compare the cost of the algorithms, not of their default settings.
 Usage: ``python -m benchmarks.speed.pdqn_speed [--env RoboCupDribblePaper-v0] [--steps 5000] [--n-envs 1 16]``
 
 Single runs on a shared machine: repeat them, and report the load average next to the numbers.
+
+Note, for comparison: before the fast gradient steps (main at 337ec70; AMD EPYC, torch 2.13 CPU, load average 0.4),
+``--n-envs 1`` gave P-DQN 355 and MP-DQN 229 env steps/s.
 """
 
 from __future__ import annotations
