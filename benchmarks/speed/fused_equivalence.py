@@ -37,6 +37,8 @@ def score(algo: str, env_id: str, seed: int, steps: int, episodes: int, optimize
     env = make_vec_env(env_id, n_envs=1, seed=seed)
     policy_kwargs = {} if optimizer_kwargs is None else dict(optimizer_kwargs=optimizer_kwargs)
     if algo == "HybridPPO":
+        if optimizer_kwargs is not None:  # keep the policy's default Adam eps (1e-5), which optimizer_kwargs replace
+            policy_kwargs = dict(optimizer_kwargs=dict(optimizer_kwargs, eps=1e-5))
         model = HybridPPO("MlpPolicy", env, n_steps=256, batch_size=64, seed=seed, device="cpu", policy_kwargs=policy_kwargs)
     else:
         cls = PDQN if algo == "PDQN" else MPDQN
