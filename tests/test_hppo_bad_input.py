@@ -100,3 +100,13 @@ def test_non_finite_policy_output_stops_before_the_env_sees_it():
     with pytest.raises(FloatingPointError, match="the policy's output"):
         model.learn(32)
     assert env.all_finite and env.count == 0
+
+
+def test_non_finite_type_logits_stop_before_the_env_sees_them():
+    env = PoisonedRewardEnv(poison_at=10**9)
+    model = HybridPPO("MlpPolicy", env, seed=0, **SMALL)
+    with th.no_grad():
+        model.policy.type_head.bias.fill_(float("nan"))
+    with pytest.raises(FloatingPointError, match=r"the policy's output \(the type logits\)"):
+        model.learn(32)
+    assert env.count == 0

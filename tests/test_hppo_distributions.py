@@ -115,3 +115,20 @@ def test_log_prob_counts_only_the_chosen_types_parameters(case):
     x_changed = np.where(owned, x, other_x)
     mean_changed = np.where(owned, mean, other_mean)
     assert log_prob(x_changed, mean_changed) == log_prob(x, mean)
+
+
+def test_the_type_part_is_torchs_categorical_bit_for_bit():
+    """Log-probabilities, entropy, mode and seeded samples of the types are torch.distributions.Categorical's."""
+    generator = th.Generator().manual_seed(0)
+    logits = th.randn(64, 2, generator=generator) * 3
+    dist = distribution(logits=logits, mean=MEAN.repeat(64, 1))
+    categorical = th.distributions.Categorical(logits=logits)
+    types = th.randint(0, 2, (64,), generator=generator)
+    actions = th.cat((types.unsqueeze(1).float(), th.zeros(64, 3)), dim=1)
+    assert th.equal(dist.log_prob_parts(actions)[0], categorical.log_prob(types))
+    assert th.equal(dist.type_entropy(), categorical.entropy())
+    assert th.equal(dist.mode()[:, 0].long(), categorical.logits.argmax(1))
+    th.manual_seed(1)
+    sampled = dist.sample()[:, 0].long()
+    th.manual_seed(1)
+    assert th.equal(sampled, categorical.sample())

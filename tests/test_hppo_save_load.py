@@ -74,7 +74,7 @@ def test_deterministic_predict_is_the_mode():
     with th.no_grad():
         dist = model.policy.get_distribution(th.as_tensor(obs))
     k, params = model.policy.spec.from_env(first)
-    np.testing.assert_array_equal(k, dist.types.logits.argmax(1).numpy())
+    np.testing.assert_array_equal(k, dist.type_logits.argmax(1).numpy())
     np.testing.assert_allclose(params, np.clip(dist.mean.numpy(), -1, 1), atol=1e-5)
     sampled = {model.predict(obs[0], deterministic=False)[0][0] for _ in range(30)}
     assert len(sampled) > 1  # sampling explores the types (entropy is still high after 64 steps)

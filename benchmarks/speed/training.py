@@ -5,13 +5,14 @@ comparison per subcommand (``python -m benchmarks.speed.training COMPARISON --he
 * ``sarsa``: SarsaAAC next to PPO and DQN, its cost growth with the number of RBFs, and ``predict`` latency;
 * ``deep``: SarsaAAC's ``DeepPolicy`` next to TD3;
 * ``hppo``: HybridPPO next to PPO;
-* ``pdqn``: P-DQN and MP-DQN next to TD3 and DQN, and ``predict`` latency.
+* ``pdqn``: P-DQN and MP-DQN next to TD3 and DQN, and ``predict`` latency;
+* ``fused``: the torch learners' outcomes over seeds with the fused optimizer against the per-tensor loop.
 
 ``predict`` latency is :func:`benchmarks.evaluation.predict_microseconds` (the median of single calls on the final
 evaluation set's first observations), as the grid records it. Single runs on a shared machine: repeat them, and
 report the load average (printed) with the numbers.
 
-Usage: ``python -m benchmarks.speed.training sarsa|deep|hppo|pdqn [options]``
+Usage: ``python -m benchmarks.speed.training sarsa|deep|hppo|pdqn|fused [options]``
 """
 
 from __future__ import annotations
@@ -25,8 +26,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch as th
+from scipy import stats
 from stable_baselines3 import DQN, PPO, TD3
 from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import VecEnv
 
 import robocup_dribble
@@ -87,7 +90,10 @@ column gives HybridPPO on the batched :class:`robocup_dribble.DribbleVecEnv` (th
 The measurements are interleaved and repeated (``--repeats``); the medians are printed, so that a load change on a
 shared machine hits both sides alike.
 
-Usage: ``python -m benchmarks.speed.training hppo [--env RoboCupDribblePaper-v0] [--steps 8192] [--repeats 3]``"""
+Usage: ``python -m benchmarks.speed.training hppo [--env RoboCupDribblePaper-v0] [--steps 8192] [--repeats 3]``
+
+Note, for comparison: before the fast rollouts (main at 337ec70; AMD EPYC, torch 2.13 CPU, load average 0.4), HybridPPO
+with this rollout shape on one env (``--n-envs 1``) gave 1219 env steps/s."""
 
 PDQN_DOC = """Training throughput (env steps per second) and single-observation ``predict`` latency of P-DQN and MP-DQN next to
 SB3's TD3 and DQN, on the same env, machine and run.
@@ -100,7 +106,24 @@ figures compare the cost of the algorithms, not of their default settings.
 
 Usage: ``python -m benchmarks.speed.training pdqn [--env RoboCupDribblePaper-v0] [--steps 5000] [--n-envs 1 16]``
 
-Single runs on a shared machine: repeat them, and report the load average next to the numbers."""
+Single runs on a shared machine: repeat them, and report the load average next to the numbers.
+
+Note, for comparison: before the fast gradient steps (main at 337ec70; AMD EPYC, torch 2.13 CPU, load average 0.4),
+``--n-envs 1`` gave P-DQN 355 and MP-DQN 229 env steps/s."""
+
+FUSED_DOC = """Do the torch learners learn as well with torch's fused optimizer (their default,
+:func:`sb3_aac.common.updates.make_optimizer`) as with the per-tensor loop (``optimizer_kwargs=dict(foreach=False)``,
+torch's CPU default before)? The two compute the same update rounded differently, so seeded runs part after the
+first steps; this compares the outcomes over seeds.
+
+For each learner and each of ``--seeds`` seeds, one run per arithmetic (the same seed, hyperparameters and env) of
+``--steps`` env steps on ``--env``, then the greedy policy's mean return over ``--eval-episodes`` episodes (SB3's
+``evaluate_policy``, deterministic). Printed per learner: the mean and standard deviation of each arithmetic's
+scores, the paired difference (fused - loop) with its 95% confidence interval, and the p-values of the paired
+Wilcoxon signed-rank test and of the Mann-Whitney U test. Equivalence at this resolution: the interval holds 0 and
+both p-values exceed 0.05 (a check for a broken update, not a proof of equality: small differences need more seeds).
+
+Usage: ``python -m benchmarks.speed.training fused [--algos PDQN MPDQN HybridPPO] [--seeds 10] [--steps 3000]``"""
 
 
 # ---------------------------------------------------------------- sarsa
@@ -357,11 +380,63 @@ def pdqn_main(argv: list[str]) -> None:
     )
 
 
+# ---------------------------------------------------------------- fused
+
+
+ARITHMETIC = {"loop": dict(foreach=False), "fused": None}
+
+
+def fused_score(
+    algo: str, env_id: str, seed: int, steps: int, episodes: int, optimizer_kwargs: dict[str, bool] | None
+) -> float:
+    env = make_vec_env(env_id, n_envs=1, seed=seed)
+    policy_kwargs = {} if optimizer_kwargs is None else dict(optimizer_kwargs=optimizer_kwargs)
+    if algo == "HybridPPO":
+        if optimizer_kwargs is not None:  # keep the policy's default Adam eps (1e-5), which optimizer_kwargs replace
+            policy_kwargs = dict(optimizer_kwargs=dict(optimizer_kwargs, eps=1e-5))
+        model = HybridPPO("MlpPolicy", env, n_steps=256, batch_size=64, seed=seed, device="cpu", policy_kwargs=policy_kwargs)
+    else:
+        cls = PDQN if algo == "PDQN" else MPDQN
+        model = cls("MlpPolicy", env, learning_starts=500, seed=seed, device="cpu", policy_kwargs=policy_kwargs)
+    model.learn(steps)
+    returns, _ = evaluate_policy(model, make_vec_env(env_id, n_envs=1, seed=10_000 + seed), episodes, deterministic=True)
+    return float(returns)
+
+
+def fused_main(argv: list[str]) -> None:
+    parser = argparse.ArgumentParser(prog="training fused", description=FUSED_DOC)
+    parser.add_argument("--env", default="RoboCupDribblePaper-v0")
+    parser.add_argument("--algos", nargs="+", default=["PDQN", "MPDQN", "HybridPPO"])
+    parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--steps", type=int, default=3000)
+    parser.add_argument("--eval-episodes", type=int, default=20)
+    args = parser.parse_args(argv)
+    th.set_num_threads(1)
+    print(f"{args.env}; {args.steps} steps; {args.seeds} seeds; greedy mean return over {args.eval_episodes} episodes")
+    for algo in args.algos:
+        scores = {
+            name: np.array([fused_score(algo, args.env, s, args.steps, args.eval_episodes, kw) for s in range(args.seeds)])
+            for name, kw in ARITHMETIC.items()
+        }
+        diff = scores["fused"] - scores["loop"]
+        half = stats.t.ppf(0.975, len(diff) - 1) * diff.std(ddof=1) / np.sqrt(len(diff))
+        wilcoxon = stats.wilcoxon(diff).pvalue if np.any(diff != 0) else 1.0
+        mann_whitney = stats.mannwhitneyu(scores["fused"], scores["loop"]).pvalue
+        print(
+            f"{algo:10s} loop {scores['loop'].mean():8.3f} +- {scores['loop'].std(ddof=1):.3f}  "
+            f"fused {scores['fused'].mean():8.3f} +- {scores['fused'].std(ddof=1):.3f}  "
+            f"fused - loop {diff.mean():+.3f} [{diff.mean() - half:+.3f}, {diff.mean() + half:+.3f}]  "
+            f"Wilcoxon p {wilcoxon:.2f}  Mann-Whitney p {mann_whitney:.2f}",
+            flush=True,
+        )
+
+
 COMPARISONS: dict[str, Callable[[list[str]], None]] = {
     "sarsa": sarsa_main,
     "deep": deep_main,
     "hppo": hppo_main,
     "pdqn": pdqn_main,
+    "fused": fused_main,
 }
 
 

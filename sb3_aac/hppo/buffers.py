@@ -79,13 +79,22 @@ class HybridRolloutBuffer(RolloutBuffer):
         action: np.ndarray,
         reward: np.ndarray,
         episode_start: np.ndarray,
-        value: th.Tensor,
-        type_log_prob: th.Tensor,
-        param_log_prob: th.Tensor,
+        value: np.ndarray,
+        type_log_prob: np.ndarray,
+        param_log_prob: np.ndarray,
     ) -> None:
-        """One step of every env: SB3's ``add`` with the log-probability split into its two parts."""
-        self.param_log_probs[self.pos] = param_log_prob.cpu().numpy()
-        super().add(obs, action, reward, episode_start, value, type_log_prob)
+        """One step of every env (each argument ``(n_envs, ...)``): SB3's ``add`` with the log-probability split into
+        its two parts, from arrays (no tensor copies)."""
+        pos = self.pos
+        self.observations[pos] = obs
+        self.actions[pos] = np.reshape(action, (self.n_envs, self.action_dim))
+        self.rewards[pos] = reward
+        self.episode_starts[pos] = episode_start
+        self.values[pos] = value
+        self.log_probs[pos] = type_log_prob
+        self.param_log_probs[pos] = param_log_prob
+        self.pos = pos + 1
+        self.full = self.pos == self.buffer_size
 
     def get(self, batch_size: int | None = None) -> Generator[HybridRolloutBufferSamples, None, None]:  # type: ignore[override]
         if not self.generator_ready:

@@ -21,7 +21,7 @@ import numpy as np
 import torch as th
 from stable_baselines3.common.distributions import Distribution
 from torch import nn
-from torch.distributions import Categorical
+from torch.nn import functional as F
 
 SelfHybridDistribution = TypeVar("SelfHybridDistribution", bound="HybridDistribution")
 
@@ -54,7 +54,8 @@ class HybridDistribution(Distribution):
         self.n_params = len(param_type)
         # owner[k, j] = 1.0 where scalar parameter j belongs to type k
         self.owner = th.as_tensor(np.arange(n_types)[:, None] == np.asarray(param_type)[None, :], dtype=th.float32)
-        self.types: Categorical
+        self.type_logits: th.Tensor
+        """``(n, K)`` normalised: ``log p(k|s)``."""
         self.mean: th.Tensor
         self.log_std: th.Tensor
 
@@ -78,11 +79,20 @@ class HybridDistribution(Distribution):
         :param mean: ``(n, n_params)`` parameter means (scaled space)
         :param log_std: ``(n_params,)`` or ``(n, n_params)`` log standard deviations
         """
-        self.types = Categorical(logits=type_logits)
+        # The categorical's arithmetic as torch.distributions.Categorical's, without its per-call validation.
+        self.type_logits = type_logits - type_logits.logsumexp(dim=-1, keepdim=True)
+        self._type_probs: th.Tensor | None = None
         self.mean = mean
         self.log_std = log_std.expand_as(mean)
         self.owner = self.owner.to(mean.device)
         return self
+
+    @property
+    def type_probs(self) -> th.Tensor:
+        """``(n, K)``: ``p(k|s)``."""
+        if self._type_probs is None:
+            self._type_probs = F.softmax(self.type_logits, dim=-1)
+        return self._type_probs
 
     def _chosen(self, types: th.Tensor) -> th.Tensor:
         """``(n, n_params)`` True where the parameter belongs to the row's type."""
@@ -97,7 +107,7 @@ class HybridDistribution(Distribution):
         params = actions[:, 1:]
         per_param = -(((params - self.mean) / self.log_std.exp()) ** 2) / 2 - self.log_std - HALF_LOG_2PI
         # where(), not a product with the mask: an unused entry that is huge (inf) must not make the sum NaN
-        type_log_prob: th.Tensor = self.types.log_prob(types)  # type: ignore[no-untyped-call]
+        type_log_prob = self.type_logits.gather(-1, types.unsqueeze(-1)).squeeze(-1)
         return type_log_prob, th.where(self._chosen(types), per_param, 0.0).sum(dim=1)
 
     def log_prob(self, actions: th.Tensor) -> th.Tensor:
@@ -107,8 +117,8 @@ class HybridDistribution(Distribution):
 
     def type_entropy(self) -> th.Tensor:
         """``H(k|s)``, ``(n,)``."""
-        entropy: th.Tensor = self.types.entropy()  # type: ignore[no-untyped-call]
-        return entropy
+        logits = th.clamp(self.type_logits, min=th.finfo(self.type_logits.dtype).min)
+        return -(logits * self.type_probs).sum(-1)
 
     def param_entropies(self) -> th.Tensor:
         """``(n, K)``: the entropy of each type's Gaussian (0 for a type without parameters)."""
@@ -116,22 +126,25 @@ class HybridDistribution(Distribution):
 
     def entropy_parts(self) -> tuple[th.Tensor, th.Tensor]:
         """``H(k|s)`` and ``sum_k p(k|s) H(N_k)`` with ``p`` detached (see the class docstring), each ``(n,)``."""
-        weights = self.types.probs.detach()
+        weights = self.type_probs.detach()
         return self.type_entropy(), (weights * self.param_entropies()).sum(dim=1)
 
     def entropy(self) -> th.Tensor:
         """The exact entropy ``H(k|s) + sum_k p(k|s) H(N_k)``, ``(n,)``."""
-        return self.type_entropy() + (self.types.probs * self.param_entropies()).sum(dim=1)
+        return self.type_entropy() + (self.type_probs * self.param_entropies()).sum(dim=1)
 
     def sample(self) -> th.Tensor:
         """Packed actions ``(n, 1 + n_params)``: ``k ~ p(.|s)`` and every type's parameters ``~ N(mu, sigma)``."""
-        types = self.types.sample()  # type: ignore[no-untyped-call]
+        # th.multinomial's draw of one sample, argmax(p / q) with q ~ Exp(1) (the same generator calls, so the same
+        # types), without its checks of the probabilities, which synchronise with the device twice per call.
+        probs = self.type_probs
+        types = (probs / th.empty_like(probs).exponential_()).argmax(dim=-1)
         params = self.mean + self.log_std.exp() * th.randn_like(self.mean)
         return th.cat((types.unsqueeze(1).to(params.dtype), params), dim=1)
 
     def mode(self) -> th.Tensor:
         """Packed actions ``(n, 1 + n_params)``: the most probable type (the lowest index on ties) and the means."""
-        types = self.types.logits.argmax(dim=1)
+        types = self.type_logits.argmax(dim=1)
         return th.cat((types.unsqueeze(1).to(self.mean.dtype), self.mean), dim=1)
 
     def actions_from_params(

@@ -233,7 +233,9 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
         while n_steps < n_rollout_steps:
             with th.no_grad():
                 packed_t, values, type_log_prob, param_log_prob = self.policy(obs_as_tensor(self._last_obs, self.device))
-            packed = packed_t.cpu().numpy()
+            packed, type_log_probs = packed_t.cpu().numpy(), type_log_prob.cpu().numpy()
+            if not np.isfinite(type_log_probs).all():
+                self._raise_divergence("the policy's output (the type logits)")
             if not np.isfinite(packed).all():
                 self._raise_divergence("the policy's output (the parameter means or standard deviations)")
             k, params = packed[:, 0].astype(np.int64), np.clip(packed[:, 1:], -1.0, 1.0)
@@ -249,30 +251,40 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
                 new_obs, rewards, dones, infos = env.step(actions)  # type: ignore[assignment]
             self.num_timesteps += env.num_envs
             check_finite_step(new_obs, rewards, self.num_timesteps)
-            self._action_stats.add(k, params, values.cpu().numpy())
             callback.update_locals(locals())
             if not callback.on_step():
+                # The executed actions' statistics: the buffer's steps and this one (which no update learns from).
+                self._add_action_stats(rollout_buffer)
+                self._action_stats.add(k, params, values.cpu().numpy())
                 return False
-            self._on_episodes_end(dones, infos)
+            if dones.any():
+                self._on_episodes_end(dones, infos)
+                self._bootstrap_truncated(rewards, dones, infos)
             n_steps += 1
-            self._bootstrap_truncated(rewards, dones, infos)
             rollout_buffer.add(
                 self._last_obs,  # type: ignore[arg-type]
                 packed,
                 rewards,
                 self._last_episode_starts,  # type: ignore[arg-type]
-                values,
-                type_log_prob,
-                param_log_prob,
+                values.cpu().numpy(),
+                type_log_probs,
+                param_log_prob.cpu().numpy(),
             )
             self._last_obs = new_obs
             self._last_episode_starts = dones
+        self._add_action_stats(rollout_buffer)
         with th.no_grad():
             values = self.policy.predict_values(obs_as_tensor(new_obs, self.device))
         rollout_buffer.compute_returns_and_advantage(last_values=values, dones=dones)
         callback.update_locals(locals())
         callback.on_rollout_end()
         return True
+
+    def _add_action_stats(self, rollout_buffer: HybridRolloutBuffer) -> None:
+        """The executed types, clipped parameters and values of the steps in ``rollout_buffer`` (one call per rollout)."""
+        actions = rollout_buffer.actions[: rollout_buffer.pos].reshape(-1, rollout_buffer.action_dim)
+        values = rollout_buffer.values[: rollout_buffer.pos].ravel()
+        self._action_stats.add(actions[:, 0].astype(np.int64), np.clip(actions[:, 1:], -1.0, 1.0), values)
 
     def _bootstrap_truncated(self, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]]) -> None:
         """Add ``gamma * V(terminal observation)`` to the rewards of lanes cut by a time limit (as SB3 does, https://github.com/DLR-RM/stable-baselines3/issues/633)."""

@@ -14,6 +14,8 @@ from torch import nn
 
 from sb3_aac.common.observations import check_box_observation_space, observation_batch
 from sb3_aac.common.spaces import ParameterizedActionSpec
+from sb3_aac.common.layer_calls import run_layers
+from sb3_aac.common.updates import make_optimizer
 from sb3_aac.hppo.torch_layers import BoundsScaledFlatten
 from sb3_aac.hppo.distributions import HybridDistribution
 
@@ -53,7 +55,7 @@ def _net_arch(net_arch: list[int] | dict[str, list[int]] | None) -> dict[str, li
     return arch
 
 
-def _mlp(n_inputs: int, sizes: list[int], activation_fn: type[nn.Module]) -> tuple[nn.Module, int]:
+def _mlp(n_inputs: int, sizes: list[int], activation_fn: type[nn.Module]) -> tuple[nn.Sequential, int]:
     """Hidden layers (no output layer) and their output width (``n_inputs`` if there are none)."""
     return nn.Sequential(*create_mlp(n_inputs, -1, sizes, activation_fn)), sizes[-1] if sizes else n_inputs
 
@@ -148,8 +150,7 @@ class HybridActorCriticPolicy(BasePolicy):
             }
             for module, gain in gains.items():
                 module.apply(lambda m, gain=gain: self.init_weights(m, gain=gain))  # type: ignore[misc]
-        # SB3's optimizer_class is typed as the Optimizer base, whose constructor takes no lr (as in SB3's own policies).
-        self.optimizer = self.optimizer_class(self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)  # type: ignore[call-arg]
+        self.optimizer = make_optimizer(self.optimizer_class, self.parameters(), lr_schedule(1), self.optimizer_kwargs)
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
         data = super()._get_constructor_parameters()
@@ -175,12 +176,13 @@ class HybridActorCriticPolicy(BasePolicy):
 
     def _distribution_and_value(self, obs: PyTorchObs) -> tuple[HybridDistribution, th.Tensor]:
         features = self.extract_features(obs, self.features_extractor)
-        latent = self.shared_net(features)
+        latent = run_layers(self.shared_net, features)
+        type_logits = self.type_head(run_layers(self.type_net, latent))
         # a copy per call: predict from several threads shares no distribution state
         distribution = copy.copy(self.action_dist).proba_distribution(
-            self.type_head(self.type_net(latent)), self.mean_head(self.params_net(latent)), self.log_std
+            type_logits, self.mean_head(run_layers(self.params_net, latent)), self.log_std
         )
-        return distribution, self.value_head(self.value_net(features)).squeeze(1)
+        return distribution, self.value_head(run_layers(self.value_net, features)).squeeze(1)
 
     def forward(self, obs: PyTorchObs, deterministic: bool = False) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor]:
         """Packed actions ``(n, 1 + n_params)`` (unclipped), values ``(n,)``, and the type and parameter log-probs."""
@@ -204,7 +206,7 @@ class HybridActorCriticPolicy(BasePolicy):
     def predict_values(self, obs: PyTorchObs) -> th.Tensor:
         """``V(s)``, ``(n,)``."""
         features = self.extract_features(obs, self.features_extractor)
-        values: th.Tensor = self.value_head(self.value_net(features)).squeeze(1)
+        values: th.Tensor = self.value_head(run_layers(self.value_net, features)).squeeze(1)
         return values
 
     def _predict(self, observation: PyTorchObs, deterministic: bool = False) -> th.Tensor:

@@ -1,4 +1,4 @@
-"""Features extractors shared by the torch policies (SB3's ``features_extractor_class``)."""
+"""HybridPPO's features extractor: the observation flattened and scaled by the observation space's bounds."""
 
 from __future__ import annotations
 

@@ -15,7 +15,6 @@ from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Rollout
 from stable_baselines3.common.utils import (
     FloatSchedule,
     LinearSchedule,
-    polyak_update,
     should_collect_more_steps,
     update_learning_rate,
 )
@@ -31,6 +30,7 @@ from sb3_aac.common.hyperparameters import check_counts, check_fraction, check_p
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
+from sb3_aac.common.updates import clip_grad_norm, polyak_update, set_grads
 from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer
 from sb3_aac.pdqn.noise import ParamNoise
 from sb3_aac.pdqn.policies import MlpPolicy, PDQNPolicy
@@ -266,14 +266,15 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
 
     def _greedy_numpy(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Greedy types ``(n,)`` and unclipped actor parameters ``(n, n_params)``; raises on non-finite outputs."""
-        with th.no_grad():
-            q, params, k = self.policy.greedy(self.policy.features(th.as_tensor(obs, device=self.device)))
-        q_np, params_np = q.cpu().numpy(), params.cpu().numpy()
-        if not np.isfinite(params_np).all():
-            self._raise_divergence("the parameter actor's output")
-        if not np.isfinite(q_np).all():
-            self._raise_divergence("the Q network's output")
-        return k.cpu().numpy(), params_np.astype(np.float64)
+        policy, n_types = self.policy, self.policy.spec.n_types
+        with th.inference_mode():
+            q, params, k = policy.greedy(policy.features(th.as_tensor(obs, device=self.device)))
+            # One transfer: [q, params, k] per row (the type is exact as a float).
+            out = th.cat((q, params, k.unsqueeze(1).to(q.dtype)), dim=1).cpu().numpy()
+        if not np.isfinite(out).all():
+            params_finite = np.isfinite(out[:, n_types:-1]).all()
+            self._raise_divergence("the Q network's output" if params_finite else "the parameter actor's output")
+        return out[:, -1].astype(np.int64), out[:, n_types:-1].astype(np.float64)
 
     def _random_types(self, k: np.ndarray, rate: float) -> np.ndarray:
         """``k`` with each entry replaced by a uniformly random type with probability ``rate``."""
@@ -408,6 +409,7 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
         update_learning_rate(policy.q_optimizer, q_lr)
         update_learning_rate(policy.actor_optimizer, actor_lr)
         loss_fn, invert = LOSSES[self.loss], policy.param_bounding == "invert_gradients"
+        q_params, actor_params = policy.q_net_params, policy.actor_params
         q_losses, actor_losses, q_values = [], [], []
         for _ in range(gradient_steps):
             data = self.replay_buffer.sample(batch_size, self._rng)
@@ -421,9 +423,9 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
                 target = data.rewards + (1.0 - data.dones) * self.gamma * next_q
             q = policy.q_net(features, data.params).gather(1, data.action_types.unsqueeze(1)).squeeze(1)
             q_loss = loss_fn(q, target)
-            policy.q_optimizer.zero_grad()
-            q_loss.backward()  # type: ignore[no-untyped-call]
-            th.nn.utils.clip_grad_norm_(policy.q_net.parameters(), self.max_grad_norm)
+            q_grads = th.autograd.grad(q_loss, q_params)
+            clip_grad_norm(q_grads, self.max_grad_norm)
+            set_grads(q_params, q_grads)
             policy.q_optimizer.step()
 
             params = policy.actor(features)
@@ -435,15 +437,16 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
                 surrogate = -(invert_gradients(ascent, leaf.detach()) * params).sum()
             else:
                 actor_loss = surrogate = -policy.q_net(features, params).sum(1).mean()
-            policy.actor_optimizer.zero_grad()
-            surrogate.backward()
-            th.nn.utils.clip_grad_norm_(policy.actor.parameters(), self.max_grad_norm)
+            # The actor's gradients only: the Q network's are not needed (the next Q step replaces them).
+            actor_grads = th.autograd.grad(surrogate, actor_params)
+            clip_grad_norm(actor_grads, self.max_grad_norm)
+            set_grads(actor_params, actor_grads)
             policy.actor_optimizer.step()
 
             self._n_updates += 1
             if self._n_updates % self.target_update_interval == 0:
-                polyak_update(policy.q_net.parameters(), policy.q_net_target.parameters(), self.tau)
-                polyak_update(policy.actor.parameters(), policy.actor_target.parameters(), self.actor_tau)
+                polyak_update(q_params, policy.q_net_target_params, self.tau)
+                polyak_update(actor_params, policy.actor_target_params, self.actor_tau)
             q_losses.append(q_loss.detach())
             actor_losses.append(actor_loss.detach())
             q_values.append(q.detach())

@@ -13,6 +13,8 @@ from torch import nn
 from sb3_aac.common.observations import check_box_observation_space, observation_batch
 from sb3_aac.common.sizes import check_layer_sizes
 from sb3_aac.common.spaces import ParameterizedActionSpec
+from sb3_aac.common.layer_calls import run_layers
+from sb3_aac.common.updates import make_optimizer
 
 PARAM_BOUNDINGS = ("invert_gradients", "tanh")
 
@@ -52,12 +54,11 @@ class QNetwork(nn.Module):
     def forward(self, features: th.Tensor, params: th.Tensor) -> th.Tensor:
         """``(n, K)`` values of every type, given features ``(n, D)`` and scaled parameters ``(n, n_params)``."""
         if not self.multi_pass:
-            values: th.Tensor = self.net(th.cat((features, params), dim=1))
-            return values
+            return run_layers(self.net, th.cat((features, params), dim=1))
         n, k = len(features), self.n_types
         # Pass j: features and only type j's parameters; rows j*n .. (j+1)*n - 1.
         masked = (params.unsqueeze(0) * self.owner_mask.unsqueeze(1)).reshape(k * n, -1)
-        q_all = self.net(th.cat((features.repeat(k, 1), masked), dim=1)).reshape(k, n, k)
+        q_all = run_layers(self.net, th.cat((features.repeat(k, 1), masked), dim=1)).reshape(k, n, k)
         diagonal: th.Tensor = q_all.diagonal(dim1=0, dim2=2)  # (n, K): Q_j taken from pass j
         return diagonal
 
@@ -96,10 +97,11 @@ class ParamActor(nn.Module):
         nn.init.normal_(last.weight, std=1e-4)
         nn.init.zeros_(last.bias)
         offset = np.arctanh(np.clip(initial_params, -0.999, 0.999)) if squash else initial_params
+        self.offset: th.Tensor
         self.register_buffer("offset", th.as_tensor(offset, dtype=th.float32))
 
     def forward(self, features: th.Tensor) -> th.Tensor:
-        out = self.net(features) + self.offset
+        out = run_layers(self.net, features) + self.offset
         return th.tanh(out) if self.squash else out
 
 
@@ -183,10 +185,12 @@ class PDQNPolicy(BasePolicy):
         self.q_net_target = QNetwork(n_inputs, spec, self.net_arch, self.activation_fn, self.multi_pass)
         self.actor_target.load_state_dict(self.actor.state_dict())
         self.q_net_target.load_state_dict(self.q_net.state_dict())
-        # SB3's optimizer_class is typed as the Optimizer base, whose constructor takes no lr (as in SB3's own policies).
-        self.q_optimizer = self.optimizer_class(self.q_net.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)  # type: ignore[call-arg]
-        self.actor_optimizer = self.optimizer_class(  # type: ignore[call-arg]
-            self.actor.parameters(), lr=self.actor_lr_schedule(1), **self.optimizer_kwargs
+        # The parameter lists of each network, for the training step (moving the policy keeps the tensor objects).
+        self.actor_params, self.actor_target_params = list(self.actor.parameters()), list(self.actor_target.parameters())
+        self.q_net_params, self.q_net_target_params = list(self.q_net.parameters()), list(self.q_net_target.parameters())
+        self.q_optimizer = make_optimizer(self.optimizer_class, self.q_net.parameters(), lr_schedule(1), self.optimizer_kwargs)
+        self.actor_optimizer = make_optimizer(
+            self.optimizer_class, self.actor.parameters(), self.actor_lr_schedule(1), self.optimizer_kwargs
         )
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
