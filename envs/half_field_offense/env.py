@@ -19,7 +19,7 @@ from half_field_offense import actions, features, referee
 from half_field_offense.lanes import HFOLanes
 from half_field_offense.task import HFOTask
 from robocup_dribble import physics
-from robocup_dribble.env import RENDER_MODES, TRAIL_LENGTH, parse_action
+from robocup_dribble.env import RENDER_MODES, TRAIL_LENGTH, lane_frame, parse_action
 from robocup_dribble.params import ServerProfile, make_profile, without_noise
 
 PROFILE = "v15"
@@ -180,18 +180,5 @@ def render_frame(
     status: str,
 ) -> Any:
     """The :class:`robocup_dribble.render.RenderFrame` of a lane (imports the renderer's module on first use)."""
-    from robocup_dribble.render import RenderFrame
-
-    s, t = lanes.state[lane], lanes.types[lane]
-    ball_size = lanes.profile.server.ball_size
-    return RenderFrame(
-        player_xy=(s[physics.P_X], s[physics.P_Y]),
-        body_deg=float(np.degrees(s[physics.P_BODY])),
-        player_size=t[physics.T_SIZE],
-        kickable_area=physics.kickable_radius(t[physics.T_SIZE], ball_size, t[physics.T_KICKABLE_MARGIN]),
-        ball_xy=(s[physics.B_X], s[physics.B_Y]),
-        ball_size=ball_size,
-        trail=np.array(list(ball_trail), dtype=np.float64).reshape(-1, 2),
-        player_trail=np.array(list(player_trail), dtype=np.float64).reshape(-1, 2),
-        caption=f"Half Field Offense | cycle {int(lanes.steps[lane])} | {status}",
-    )
+    caption = f"Half Field Offense | cycle {int(lanes.steps[lane])} | {status}"
+    return lane_frame(lanes.state[lane], lanes.types[lane], lanes.profile.server.ball_size, ball_trail, player_trail, caption)

@@ -202,11 +202,27 @@ class DribbleEnv(gym.Env):
 def render_frame(
     lanes: DribbleLanes, lane: int, ball_trail: Iterable[tuple[float, float]], player_trail: Iterable[tuple[float, float]]
 ) -> Any:
-    """The :class:`robocup_dribble.render.RenderFrame` of a lane (imports the renderer's module on first use)."""
+    """The :class:`robocup_dribble.render.RenderFrame` of a dribbling lane (imports the renderer's module on first use)."""
+    caption = (
+        f"type {int(lanes.type_ids[lane])} | step {int(lanes.steps[lane])}/{lanes.task.max_actions} | "
+        f"{lanes.distance[lane]:.1f} m"
+    )
+    return lane_frame(lanes.state[lane], lanes.types[lane], lanes.profile.server.ball_size, ball_trail, player_trail, caption)
+
+
+def lane_frame(
+    state: np.ndarray,
+    player_type: np.ndarray,
+    ball_size: float,
+    ball_trail: Iterable[tuple[float, float]],
+    player_trail: Iterable[tuple[float, float]],
+    caption: str,
+) -> Any:
+    """The :class:`robocup_dribble.render.RenderFrame` of one lane's state row and player type row (any env on these
+    physics draws through it; imports the renderer's module on first use)."""
     from robocup_dribble.render import RenderFrame
 
-    s, t = lanes.state[lane], lanes.types[lane]
-    ball_size = lanes.profile.server.ball_size
+    s, t = state, player_type
     return RenderFrame(
         player_xy=(s[physics.P_X], s[physics.P_Y]),
         body_deg=float(np.degrees(s[physics.P_BODY])),
@@ -216,8 +232,5 @@ def render_frame(
         ball_size=ball_size,
         trail=np.array(list(ball_trail), dtype=np.float64).reshape(-1, 2),
         player_trail=np.array(list(player_trail), dtype=np.float64).reshape(-1, 2),
-        caption=(
-            f"type {int(lanes.type_ids[lane])} | step {int(lanes.steps[lane])}/{lanes.task.max_actions} | "
-            f"{lanes.distance[lane]:.1f} m"
-        ),
+        caption=caption,
     )
