@@ -86,7 +86,7 @@ class DiscreteObsEnv(gym.Env):
     "env, message",
     [
         (BoxActionEnv(), r"Unsupported parameterized action space Box\(-1.0, 1.0, \(3,\), float32\)"),
-        (DiscreteObsEnv(), r"Unsupported observation space Discrete\(4\): [\w-]+ policies take a Box observation"),
+        (DiscreteObsEnv(), r"Unsupported observation space Discrete\(4\): [\w'-]+ policies take a Box observation"),
     ],
 )
 def test_unsupported_envs(case, env, message):
