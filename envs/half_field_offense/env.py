@@ -19,8 +19,8 @@ from half_field_offense import actions, features, referee
 from half_field_offense.lanes import HFOLanes
 from half_field_offense.task import HFOTask
 from robocup_dribble import physics
-from robocup_dribble.env import RENDER_MODES, TRAIL_LENGTH, lane_frame, parse_action
-from robocup_dribble.params import ServerProfile, make_profile, without_noise
+from robocup_dribble.env import RENDER_MODES, TRAIL_LENGTH, configure_task, lane_frame, parse_action
+from robocup_dribble.params import ServerProfile
 
 PROFILE = "v15"
 """The server profile HFO's rcssserver 15.2.2 fork runs (:data:`robocup_dribble.params.PROFILES`)."""
@@ -31,17 +31,8 @@ VIEW_WIDTH = 57.0  # m: the HFO area and a margin, in 560 x 700 pixels
 def configure(
     profile: str | ServerProfile, noise: bool, render_mode: str | None, task_kwargs: dict[str, Any]
 ) -> tuple[ServerProfile, HFOTask]:
-    """Validate the constructor arguments both envs share."""
-    if render_mode is not None and render_mode not in RENDER_MODES:
-        raise ValueError(f"render_mode={render_mode!r} is not supported; choose one of {list(RENDER_MODES)} or None")
-    server_profile = make_profile(profile)
-    if not noise:
-        server_profile = without_noise(server_profile)
-    allowed = set(HFOTask.__dataclass_fields__)
-    unknown = sorted(set(task_kwargs) - allowed)
-    if unknown:
-        raise ValueError(f"Unknown argument(s) {unknown}; the task takes {sorted(allowed)}")
-    return server_profile, HFOTask(**task_kwargs)
+    """Validate the constructor arguments both envs share (:func:`robocup_dribble.env.configure_task`)."""
+    return configure_task(profile, noise, render_mode, task_kwargs, HFOTask)
 
 
 def observation_space() -> spaces.Box:

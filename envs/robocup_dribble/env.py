@@ -7,8 +7,9 @@ Stable-Baselines3 ``VecEnv``) lives in its own module, so that ``DribbleEnv`` ca
 from __future__ import annotations
 
 from collections import deque
+import dataclasses
 from collections.abc import Iterable
-from typing import Any
+from typing import Any, TypeVar
 
 import gymnasium as gym
 import numpy as np
@@ -23,20 +24,31 @@ RENDER_MODES = ("human", "rgb_array")
 TRAIL_LENGTH = 20
 
 
-def configure(
-    profile: str | ServerProfile, noise: bool, render_mode: str | None, task_kwargs: dict[str, Any]
-) -> tuple[ServerProfile, DribbleTask]:
-    """Validate the shared constructor arguments of both envs."""
+Task = TypeVar("Task")
+
+
+def configure_task(
+    profile: str | ServerProfile, noise: bool, render_mode: str | None, task_kwargs: dict[str, Any], task_class: type[Task]
+) -> tuple[ServerProfile, Task]:
+    """Validate the constructor arguments every env on these physics shares: the render mode, the profile with or
+    without noise, and the keywords of the env's task dataclass ``task_class``."""
     if render_mode is not None and render_mode not in RENDER_MODES:
         raise ValueError(f"render_mode={render_mode!r} is not supported; choose one of {list(RENDER_MODES)} or None")
     server_profile = make_profile(profile)
     if not noise:
         server_profile = without_noise(server_profile)
-    allowed = set(DribbleTask.__dataclass_fields__)
+    allowed = {field.name for field in dataclasses.fields(task_class)}  # type: ignore[arg-type]
     unknown = sorted(set(task_kwargs) - allowed)
     if unknown:
         raise ValueError(f"Unknown argument(s) {unknown}; the task takes {sorted(allowed)}")
-    return server_profile, DribbleTask(**task_kwargs)
+    return server_profile, task_class(**task_kwargs)
+
+
+def configure(
+    profile: str | ServerProfile, noise: bool, render_mode: str | None, task_kwargs: dict[str, Any]
+) -> tuple[ServerProfile, DribbleTask]:
+    """Validate the shared constructor arguments of both dribbling envs (:func:`configure_task`)."""
+    return configure_task(profile, noise, render_mode, task_kwargs, DribbleTask)
 
 
 def parse_action(action: Any, action_params: tuple[tuple[str, ...], ...] = skills.ACTION_PARAMS) -> tuple[int, np.ndarray]:
