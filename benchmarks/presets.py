@@ -13,7 +13,7 @@ paper's three families (Uc-Cetina 2013, Figs. 5-7), all other hyperparameters at
 
 * ``tile``: ``TilePolicy`` (hashed tilings over the inputs and their pairs; the recommended policy, docs/sarsa_aac.md);
 * ``deep``: ``DeepPolicy`` (layer-normalised 2x64 nets with ObGD steps) with SarsaAAC's one-step updates
-  (``trace_lambda=0``): as good as the streaming paper's 0.8 or better, and cheaper (docs/sarsa_aac.md, Deep policy);
+  (``trace_lambda=0``): as good as the streaming paper's 0.8 or better, and cheaper (docs/sarsa_aac_results.md, DeepPolicy);
 * ``mlp2/10/20``: ``MlpPolicy`` with 2, 10, 20 hidden tanh units per approximator;
 * ``rbfmlp2/10/20``: ``RbfMlpPolicy``, a filter layer of 10 Gaussian RBFs per input, then 2, 10, 20 hidden units;
 * ``rbf10/30/50``: ``RbfPolicy``, arrays of 10, 30, 50 Gaussian RBFs per input, linear output.

@@ -1,9 +1,9 @@
 """mkdocs hook: warn (an error under ``--strict``) when a module of the packages has no ``::: module`` line.
 
-Every module of ``sb3_aac`` and of the env packages is rendered on exactly one page: an
-algorithm's modules on its algorithm page, the rest on an API reference page. A module added without a line in some
-page fails the build with a message saying where to add it. Package ``__init__`` files (re-exports) and the modules
-in :data:`NOT_RENDERED` are exempt.
+Every module of ``sb3_aac`` and of the env packages is rendered on exactly one page: an algorithm's modules on its
+algorithm page (SarsaAAC's on ``docs/api/sarsa_aac.md``), the rest on an API reference page. A module added without a
+line in some page fails the build with a message saying where to add it. Package ``__init__`` files (re-exports) and
+the modules in :data:`NOT_RENDERED` are exempt.
 """
 
 from __future__ import annotations

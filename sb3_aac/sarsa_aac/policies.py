@@ -382,7 +382,7 @@ class DeepPolicy(NumpyBankPolicy):
     """
 
     approximators: DeepBank
-    # SarsaAAC's rates are ObGD's step size alpha here; its figures in docs/sarsa_aac.md were measured with 0.5.
+    # SarsaAAC's rates are ObGD's step size alpha here; its figures in docs/sarsa_aac_results.md were measured with 0.5.
     default_learning_rate: ClassVar[float] = 0.5
 
     def __init__(

@@ -71,7 +71,7 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
     (:mod:`sb3_aac.sarsa_aac.lane_steps`). So ``n`` lanes take the steps one lane would take on their ``n`` samples
     (the targets bootstrapped from the weights at the start of the env step): a rate means the same per sample
     whatever the number of lanes, so the learning curve per env step changes with the lane count only through the
-    order and the correlation of the samples (measured in ``docs/sarsa_aac.md``). Rates are validated to lie in
+    order and the correlation of the samples (measured in ``docs/sarsa_aac_results.md``). Rates are validated to lie in
     ``[0, 1]``; 0 freezes an approximator (as rl-zoo3's ``enjoy`` loads a model only to act, with
     ``custom_objects={"learning_rate": 0.0}``).
 
@@ -95,7 +95,7 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
     update.
 
     The paper gives no numbers for any hyperparameter; every default below was chosen by us, on the measurements in
-    ``docs/sarsa_aac.md`` ("How the defaults were chosen").
+    ``docs/sarsa_aac_results.md`` ("How the defaults were chosen").
 
     :param policy: The policy model to use (TilePolicy, recommended; MlpPolicy, RbfMlpPolicy, RbfPolicy; or a
         SarsaAACPolicy subclass)
