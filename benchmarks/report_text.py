@@ -14,7 +14,7 @@ from benchmarks import domains
 from benchmarks.figures import RELIABILITY_STYLE
 from benchmarks.groups import KINDS, Group, best_group, budget_note, scalar_ci
 from benchmarks.presets import BASELINES, PAPER_FAMILIES, PEERS
-from benchmarks.provenance import invocations
+from benchmarks.provenance import invocations, merges
 from benchmarks.significance import MIN_SEEDS, compare, iqm, target_verdict
 from benchmarks.significance import verdict as difference_verdict
 
@@ -472,7 +472,18 @@ def _unique(results: list[dict[str, Any]], key: str) -> list[Any]:
 def _invocation_text(entry: dict[str, Any]) -> str:
     wall = "no end record" if entry["wall_s"] is None else f"{entry['wall_s'] / 60:.1f} min"
     cells = f", {entry['done']} cells run, {entry['skipped']} skipped" if "done" in entry else ""
-    return f"{entry['status']}: {wall} with {entry['workers']} workers{cells}"
+    where = f" on {entry['host']}" + (f" (shard {entry['shard']})" if "shard" in entry else "") if "host" in entry else ""
+    return f"{entry['status']}: {wall} with {entry['workers']} workers{where}{cells}"
+
+
+def _merge_text(record: dict[str, Any]) -> str:
+    hosts = ", ".join(record["hosts"]) or "not recorded"
+    commits = ", ".join(f"{commit} ({n} cells)" for commit, n in record["commits"].items())
+    mixed = "; cells of several commits merged with --allow-mixed-commits" if record["allow_mixed_commits"] else ""
+    return (
+        f"Merged {record['merged']} by `python -m benchmarks.merge` from {len(record['sources'])} results folders: "
+        f"{record['cells']} cells from the hosts {hosts}; commits {commits}{mixed}."
+    )
 
 
 def setup_section(
@@ -489,7 +500,10 @@ def setup_section(
     if log:
         total = sum(entry["wall_s"] or 0.0 for entry in log)
         parts = "; ".join(_invocation_text(e) for e in log)
-        lines.append(f"Sweep wall time: {total / 60:.1f} min over {len(log)} invocation(s) of the runner ({parts}).")
+        hosts = {entry["host"] for entry in log if "host" in entry}
+        where = f", summed over the {len(hosts)} hosts that ran in parallel" if len(hosts) > 1 else ""
+        lines.append(f"Sweep wall time: {total / 60:.1f} min over {len(log)} invocation(s) of the runner{where} ({parts}).")
+    lines += [_merge_text(record) for record in merges(out)]
     cpu_s = sum(r.get("wall_s", 0.0) for r in results)
     lines.append(f"Summed wall time of the {len(results)} cells: {cpu_s / 60:.1f} min (what one worker would need).")
     loads = [v for r in results for v in (r.get("loadavg") or {}).values() if v is not None]
