@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import shlex
+from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
@@ -500,9 +501,15 @@ def setup_section(
     if log:
         total = sum(entry["wall_s"] or 0.0 for entry in log)
         parts = "; ".join(_invocation_text(e) for e in log)
-        hosts = {entry["host"] for entry in log if "host" in entry}
-        where = f", summed over the {len(hosts)} hosts that ran in parallel" if len(hosts) > 1 else ""
-        lines.append(f"Sweep wall time: {total / 60:.1f} min over {len(log)} invocation(s) of the runner{where} ({parts}).")
+        per_host: defaultdict[str, float] = defaultdict(float)  # wall seconds per host ("": not recorded)
+        for entry in log:
+            per_host[entry.get("host", "")] += entry["wall_s"] or 0.0
+        parallel = (
+            f"; {len(per_host)} hosts ran in parallel, the busiest for {max(per_host.values()) / 60:.1f} min"
+            if len(per_host) > 1
+            else ""
+        )
+        lines.append(f"Sweep wall time: {total / 60:.1f} min over {len(log)} invocation(s) of the runner{parallel} ({parts}).")
     lines += [_merge_text(record) for record in merges(out)]
     cpu_s = sum(r.get("wall_s", 0.0) for r in results)
     lines.append(f"Summed wall time of the {len(results)} cells: {cpu_s / 60:.1f} min (what one worker would need).")
