@@ -483,7 +483,7 @@ def _merge_text(record: dict[str, Any]) -> str:
     mixed = "; cells of several commits merged with --allow-mixed-commits" if record["allow_mixed_commits"] else ""
     return (
         f"Merged {record['merged']} by `python -m benchmarks.merge` from {len(record['sources'])} results folders: "
-        f"{record['cells']} cells from the hosts {hosts}; commits {commits}{mixed}."
+        f"{record['cells']} cells (hosts: {hosts}); commits {commits}{mixed}."
     )
 
 

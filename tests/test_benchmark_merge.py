@@ -154,7 +154,7 @@ def test_merged_shards_give_the_report_of_one_folder_and_one_provenance_log(shar
     assert record["cells"] == record["copied"] == 20 and record["allow_mixed_commits"] is False
     assert record["sources"] == [str(a), str(b)] and record["machines"] == [cells[0]["machine"]]
     text = build_report(out, figures=False).read_text()
-    assert "by `python -m benchmarks.merge` from 2 results folders: 20 cells from the hosts host-a, host-b" in text
+    assert "by `python -m benchmarks.merge` from 2 results folders: 20 cells (hosts: host-a, host-b)" in text
     assert "on host-a" in text and "2 hosts ran in parallel, the busiest for 1.0 min" in text
 
 
