@@ -32,7 +32,7 @@ own results folder; ``python -m benchmarks.merge`` puts the folders together for
 
 ``--estimate`` prints what the preset (or its ``--only`` cells and studies) costs, per stage (the grid's main
 budgets, the long budgets, the equal wall-clock budget, the tuning stage) and env, in core-hours
-(:mod:`benchmarks.cost`), and with ``--cores`` its hours of wall time on that many cores; it runs nothing.
+(:mod:`benchmarks.cost`), and with ``--cores`` its wall time on that many cores; it runs nothing.
 
 ``--tune`` runs the tuning stage instead of the grid (:mod:`benchmarks.tuning`): one Optuna study per tuned learner
 and env of the preset, their best settings written to ``hyperparams/tuned/<env id>/<learner>.yml`` (``--tuned-dir``
@@ -131,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
         "--estimate", action="store_true", help="print the core-hours per stage (grid, long, wall-clock, tuning), run nothing"
     )
     parser.add_argument(
-        "--cores", type=_positive_ints, default=None, help="with --estimate: also the wall-clock hours on N[,N...] cores"
+        "--cores", type=_positive_ints, default=None, help="with --estimate: also the wall time on N[,N...] cores"
     )
     parser.add_argument("--reliability", action="store_true", help="run the reliability test of the best policies in --out")
     parser.add_argument("--players", type=_positive_int, default=RELIABILITY_PLAYERS, help="players of the reliability test")
