@@ -249,3 +249,10 @@ def test_an_invocation_record_names_its_host(tmp_path):
         pass
     (entry,) = provenance.invocations(tmp_path)
     assert entry["host"] == platform.node() and entry["status"] == "finished"
+
+
+def test_a_shards_invocation_is_logged_with_its_shard_and_host(tmp_path):
+    argv = ["--preset", "quick", "--only", "reference", "--shard", "1/1", "--workers", "1", "--allow-dirty"]
+    assert bench_run.main([*argv, "--out", str(tmp_path)]) == 0
+    (entry,) = provenance.invocations(tmp_path)
+    assert entry["shard"] == "1/1" and entry["host"] == platform.node() and entry["done"] == 1
