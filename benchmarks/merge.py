@@ -76,7 +76,10 @@ def merge(
             f"the cells come from {len(commits)} commits: {shown}; the shards of one sweep run one commit: rerun the "
             "odd cells at the others' commit, or pass --allow-mixed-commits (recorded in the merge record)"
         )
-    versions = _distinct(result.get("versions", {}) for result in merged.values())
+    versions = _distinct(  # the packages' (the commits are counted above)
+        {name: version for name, version in result.get("versions", {}).items() if name != "git_commit"}
+        for result in merged.values()
+    )
     machines = _distinct(result.get("machine", {}) for result in merged.values())
     if len(versions) > 1:
         _warn(f"the cells ran with {len(versions)} sets of package versions; the report lists each")

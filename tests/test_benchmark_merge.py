@@ -206,6 +206,7 @@ def test_cells_of_different_commits_are_refused_unless_allowed(tmp_path, capsys)
 def test_different_machines_and_versions_are_merged_with_a_warning(tmp_path, capsys):
     a, b = tmp_path / "a", tmp_path / "b"
     cells = sweep_cells()[:2]
+    cells[0]["versions"] = {"python": "3.11", "git_commit": "c0ffee"}
     cells[1] = {**cells[1], "machine": {**cells[1]["machine"], "cpu": "other CPU"}, "versions": {"python": "3.12"}}
     write_folder(a, cells[:1], "host-a", extra_files=False)
     write_folder(b, cells[1:], "host-b", extra_files=False)
