@@ -3,6 +3,8 @@ same pieces. Its entry points (run with ``PYTHONPATH=.:envs python -m benchmarks
 
 * :mod:`benchmarks.run`: the grid (``--preset quick|full``) and the studies of one algorithm family (``--preset
   pdqn|hppo``), one JSON file per finished cell, resumable; ``--tune`` its tuning stage, ``--estimate`` its cost;
+  ``--shard I/N`` one machine's share;
+* :mod:`benchmarks.merge`: the results directories of several machines' shards as one, with one provenance log;
 * :mod:`benchmarks.report`: ``report.md`` and its figures from a results directory;
 * :mod:`benchmarks.learning`: the ad-hoc tool: SarsaAAC's learning targets per (task, policy) over seeds, and
   (``efficiency``) the sample-efficiency comparison with TD3 on the domains with interacting inputs;
@@ -24,7 +26,9 @@ The pieces:
 * :mod:`benchmarks.workers`: the worker pool (processes that end with their driver, one BLAS thread each);
 * :mod:`benchmarks.engines`: running the cells on Ray (``--engine ray``), each engine handed its cell runner;
 * :mod:`benchmarks.process_reaper`: the watchdog that ends what a Ray instance leaves behind;
-* :mod:`benchmarks.cost`: what a preset costs, per stage, in core-hours (``--estimate``; the pool's ordering);
+* :mod:`benchmarks.cost`: what a preset costs, per stage, in core-hours, and in wall time on N cores (``--estimate``;
+  the pool's ordering, longest first);
+* :mod:`benchmarks.shards`: a grid split between machines (``--shard I/N``), longest first as the pool;
 * :mod:`benchmarks.tuning` and :mod:`benchmarks.tuned`: the tuning stage and the tuned settings;
 * :mod:`benchmarks.reliability`: the reliability test of the best policies;
 * :mod:`benchmarks.groups` and :mod:`benchmarks.significance`: runs as groups, the one IQM with its bootstrap interval,
@@ -32,7 +36,7 @@ The pieces:
 * :mod:`benchmarks.figures`, :mod:`benchmarks.report_text`, :mod:`benchmarks.report_budgets`: the report's figures,
   tables and sections;
 * :mod:`benchmarks.provenance`: the clean-tree check, each cell's provenance (versions, machine, load), the invocation
-  log.
+  log (each invocation's host) and its merge records.
 
 The hybrid domains' random and scripted figures are the envs' own (``python -m hybrid_domains.baselines``); the soak
 test is a script beside the test suite (``python tests/soak.py``).

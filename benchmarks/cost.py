@@ -1,6 +1,7 @@
 """What a preset costs: core-hours per stage (the grid's main budgets, the long budgets, the equal wall-clock budget
 and the tuning stage), estimated from each learner's training rate on
-each env (:func:`benchmarks.presets.training_rate`) and each env's evaluation costs.
+each env (:func:`benchmarks.presets.training_rate`) and each env's evaluation costs, and the hours of wall time
+on N cores (:func:`wall_hours`).
 
 A cell's seconds (:func:`cell_seconds`) are its training, ``budget`` env steps at :func:`training_rate` (a
 wall-clock cell: its ``seconds``), plus its greedy evaluations (a curve point of ``eval_episodes`` episodes every
@@ -13,11 +14,17 @@ early). One core runs one cell or trial (the runner pins torch and BLAS to one t
 The rates are single-core figures of the development machine (two cores shared by several jobs, so they are
 rough, within about 2x): ``python -m benchmarks.run --preset P --estimate`` prints the figure, and the local pool
 orders its cells by the same :func:`cell_seconds`.
+
+Wall time on N cores: the pool hands the longest cell still waiting to the first core that is free, so its cells
+land as :func:`longest_first` puts them, and the busiest core's sum is the wall time. ``--shard I/N`` splits a grid
+between machines the same way (:mod:`benchmarks.shards`).
 """
 
 from __future__ import annotations
 
-from typing import Any
+import heapq
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
 
 from benchmarks.presets import PRESETS, Cell, build_cells, select, training_rate
 from benchmarks.tuning import plan_studies
@@ -83,6 +90,61 @@ def stage_of(cell: Cell, preset: dict[str, Any]) -> str:
 
 
 STAGES = ("grid", "long", "wall-clock", "tuning")
+
+T = TypeVar("T")
+
+
+def longest_first(items: Sequence[T], seconds: Callable[[T], float], key: Callable[[T], str], bins: int) -> list[list[T]]:
+    """
+    Split ``items`` into ``bins`` lists as a pool of ``bins`` cores runs them longest first: the longest item still
+    waiting goes to the list with the least seconds so far (on a tie, the fewest items, then the lowest-numbered).
+    Every item lands in exactly one list, and no list is empty while another holds two; equal seconds are ordered by
+    ``key``, so the split does not depend on the order of ``items``. The busiest list holds at most
+    ``sum / bins + max`` seconds (and at most 4/3 of the best split's).
+
+    :raises ValueError: if ``bins`` < 1
+    """
+    if bins < 1:
+        raise ValueError(f"bins must be >= 1, got {bins}")
+    loads = [(0.0, 0, b) for b in range(bins)]
+    split: list[list[T]] = [[] for _ in range(bins)]
+    for item in sorted(items, key=lambda i: (-seconds(i), key(i))):
+        load, count, b = heapq.heappop(loads)
+        split[b].append(item)
+        heapq.heappush(loads, (load + seconds(item), count + 1, b))
+    return split
+
+
+def busiest_hours(durations: Sequence[float], cores: int) -> float:
+    """Hours until ``cores`` cores have run jobs of ``durations`` seconds longest first (:func:`longest_first`)."""
+    jobs = list(enumerate(durations))
+    split = longest_first(jobs, lambda job: job[1], lambda job: f"{job[0]:09d}", cores)
+    return max(sum(seconds for _, seconds in part) for part in split) / 3600
+
+
+def wall_hours(preset: str | dict[str, Any], cores: int, only: str | None = None) -> dict[str, float]:
+    """
+    Estimated hours of wall time of a preset on ``cores`` cores (``only`` as in :func:`estimate`): ``"tuning"``, its
+    tuning stage's unpruned trials; ``"cells"``, then its cells (every stage's in one run, as the runner runs them);
+    ``"total"``, one after the other (tuned cells need their tuning stage's settings).
+    """
+    p = PRESETS[preset] if isinstance(preset, str) else preset
+    try:
+        studies = plan_studies(p, only=only) if "tuning" in p else []
+    except ValueError:  # `only` matches no study
+        studies = []
+    tuning = busiest_hours([trial_seconds(study) for study in studies for _ in range(study.trials)], cores)
+    cells = busiest_hours([cell_seconds(cell) for cell in select(build_cells(p), only)], cores)
+    return {"tuning": tuning, "cells": cells, "total": tuning + cells}
+
+
+def wall_text(preset: str | dict[str, Any], cores: Sequence[int], only: str | None = None) -> str:
+    """:func:`wall_hours` for each count of ``cores``, as a table in minutes."""
+    lines = [f"{'cores':>6s} {'tuning':>8s} {'cells':>8s} {'total':>8s}  (minutes)"]
+    for n in cores:
+        minutes = {stage: 60 * hours for stage, hours in wall_hours(preset, n, only).items()}
+        lines.append(f"{n:6d} {minutes['tuning']:8.1f} {minutes['cells']:8.1f} {minutes['total']:8.1f}")
+    return "\n".join(lines)
 
 
 def estimate(preset: str | dict[str, Any], only: str | None = None) -> dict[str, dict[str, float]]:

@@ -8,7 +8,10 @@
   commit (``+dirty`` when the tree had changes), the changed files, and whether ``--allow-dirty`` was given.
 * :func:`logged_invocation` / :func:`invocations`: ``runs.jsonl`` gets a ``start`` record when an invocation starts
   and an ``end`` record (its status, wall time and cell counts) when it stops, also by an exception or Ctrl-C; an
-  invocation killed outright (``SIGKILL``, power loss) keeps its start record and reads as ``"killed"``.
+  invocation killed outright (``SIGKILL``, power loss) keeps its start record and reads as ``"killed"``. Each
+  record names the host it ran on.
+* :func:`merges`: the ``merge`` records :mod:`benchmarks.merge` appends to ``runs.jsonl`` when it puts the results
+  folders of several machines together (the folders, hosts, commits, versions and machines of the merged cells).
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ import sb3_aac
 REPO = Path(__file__).resolve().parents[1]
 ENV_VAR = "SB3_AAC_BENCH_PROVENANCE"  # the invocation's provenance, JSON, for the cells it runs (workers inherit it)
 RUN_LOG = "runs.jsonl"
+MERGE_EVENT = "merge"  # the event of a record benchmarks.merge appends to RUN_LOG
 
 
 class DirtyTreeError(RuntimeError):
@@ -124,7 +128,7 @@ def cell_provenance() -> dict[str, Any]:
     return {"invocation": None, "git_commit": state.label, "changed_files": list(state.changed_files), "allow_dirty": None}
 
 
-def _append(path: Path, record: dict[str, Any]) -> None:
+def append_record(path: Path, record: dict[str, Any]) -> None:
     """One JSON line, appended and flushed to disk (a later kill cannot take it back)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "a") as f:
@@ -142,9 +146,9 @@ def logged_invocation(out: Path, **fields: Any) -> Iterator[dict[str, Any]]:
     ``"failed: <exception type>"``; the exception still propagates.
     """
     start = time.time()
-    base = {"invocation": fields.pop("invocation", None) or new_invocation_id(), **fields}
+    base = {"invocation": fields.pop("invocation", None) or new_invocation_id(), **fields, "host": platform.node()}
     base["start"] = time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(start))
-    _append(out / RUN_LOG, {"event": "start", **base})
+    append_record(out / RUN_LOG, {"event": "start", **base})
     extra: dict[str, Any] = {}
     status = "finished"
     try:
@@ -159,28 +163,38 @@ def logged_invocation(out: Path, **fields: Any) -> Iterator[dict[str, Any]]:
         status = f"failed: {type(error).__name__}"
         raise
     finally:
-        _append(out / RUN_LOG, {"event": "end", **base, "status": status, "wall_s": round(time.time() - start, 1), **extra})
+        append_record(
+            out / RUN_LOG, {"event": "end", **base, "status": status, "wall_s": round(time.time() - start, 1), **extra}
+        )
+
+
+def read_records(out: Path) -> list[dict[str, Any]]:
+    """The records of ``out/runs.jsonl`` in file order (none if it is missing); a torn line (a writer killed
+    mid-line) is skipped with a warning naming it."""
+    path = out / RUN_LOG
+    if not path.exists():
+        return []
+    records = []
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        if not line.strip():
+            continue
+        try:
+            records.append(json.loads(line))
+        except json.JSONDecodeError:
+            print(f"warning: {path}:{number} is not a JSON record (a torn line?); skipped", file=sys.stderr)
+    return records
 
 
 def invocations(out: Path) -> list[dict[str, Any]]:
     """Every invocation logged in ``out/runs.jsonl``, in start order: its end record if it has one, else its start
     record with ``status`` ``"killed"`` and ``wall_s`` None. Lines written before start/end records existed (no
-    ``event`` key) are invocations that finished. A torn line (a writer killed mid-line) is skipped with a warning
-    naming it."""
-    path = out / RUN_LOG
-    if not path.exists():
-        return []
+    ``event`` key) are invocations that finished; merge records (:func:`merges`) are no invocations."""
     entries: list[dict[str, Any]] = []
     index: dict[str, int] = {}
-    for number, line in enumerate(path.read_text().splitlines(), start=1):
-        if not line.strip():
-            continue
-        try:
-            record = json.loads(line)
-        except json.JSONDecodeError:
-            print(f"warning: {path}:{number} is not a JSON record (a torn line?); skipped", file=sys.stderr)
-            continue
+    for record in read_records(out):
         event = record.pop("event", None)
+        if event == MERGE_EVENT:
+            continue
         if event is None:
             entries.append({"status": "finished", **record})
         elif event == "start":
@@ -191,6 +205,11 @@ def invocations(out: Path) -> list[dict[str, Any]]:
         else:
             entries.append(record)  # an end record whose start line was lost
     return entries
+
+
+def merges(out: Path) -> list[dict[str, Any]]:
+    """The merge records of ``out/runs.jsonl`` (:mod:`benchmarks.merge`), in the order they were made."""
+    return [record for record in read_records(out) if record.get("event") == MERGE_EVENT]
 
 
 # ---------------------------------------------------------------- where a cell ran: versions, machine, load

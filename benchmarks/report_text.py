@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import shlex
+from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,7 @@ from benchmarks import domains
 from benchmarks.figures import RELIABILITY_STYLE
 from benchmarks.groups import KINDS, Group, best_group, budget_note, scalar_ci
 from benchmarks.presets import BASELINES, PAPER_FAMILIES, PEERS
-from benchmarks.provenance import invocations
+from benchmarks.provenance import invocations, merges
 from benchmarks.significance import MIN_SEEDS, compare, iqm, target_verdict
 from benchmarks.significance import verdict as difference_verdict
 
@@ -472,7 +473,18 @@ def _unique(results: list[dict[str, Any]], key: str) -> list[Any]:
 def _invocation_text(entry: dict[str, Any]) -> str:
     wall = "no end record" if entry["wall_s"] is None else f"{entry['wall_s'] / 60:.1f} min"
     cells = f", {entry['done']} cells run, {entry['skipped']} skipped" if "done" in entry else ""
-    return f"{entry['status']}: {wall} with {entry['workers']} workers{cells}"
+    where = f" on {entry['host']}" + (f" (shard {entry['shard']})" if "shard" in entry else "") if "host" in entry else ""
+    return f"{entry['status']}: {wall} with {entry['workers']} workers{where}{cells}"
+
+
+def _merge_text(record: dict[str, Any]) -> str:
+    hosts = ", ".join(record["hosts"]) or "not recorded"
+    commits = ", ".join(f"{commit} ({n} cells)" for commit, n in record["commits"].items())
+    mixed = "; cells of several commits merged with --allow-mixed-commits" if record["allow_mixed_commits"] else ""
+    return (
+        f"Merged {record['merged']} by `python -m benchmarks.merge` from {len(record['sources'])} results folders: "
+        f"{record['cells']} cells (hosts: {hosts}); commits {commits}{mixed}."
+    )
 
 
 def setup_section(
@@ -489,7 +501,16 @@ def setup_section(
     if log:
         total = sum(entry["wall_s"] or 0.0 for entry in log)
         parts = "; ".join(_invocation_text(e) for e in log)
-        lines.append(f"Sweep wall time: {total / 60:.1f} min over {len(log)} invocation(s) of the runner ({parts}).")
+        per_host: defaultdict[str, float] = defaultdict(float)  # wall seconds per host ("": not recorded)
+        for entry in log:
+            per_host[entry.get("host", "")] += entry["wall_s"] or 0.0
+        parallel = (
+            f"; {len(per_host)} hosts ran in parallel, the busiest for {max(per_host.values()) / 60:.1f} min"
+            if len(per_host) > 1
+            else ""
+        )
+        lines.append(f"Sweep wall time: {total / 60:.1f} min over {len(log)} invocation(s) of the runner{parallel} ({parts}).")
+    lines += [_merge_text(record) for record in merges(out)]
     cpu_s = sum(r.get("wall_s", 0.0) for r in results)
     lines.append(f"Summed wall time of the {len(results)} cells: {cpu_s / 60:.1f} min (what one worker would need).")
     loads = [v for r in results for v in (r.get("loadavg") or {}).values() if v is not None]

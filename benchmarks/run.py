@@ -3,8 +3,8 @@
 Usage::
 
     python -m benchmarks.run --preset quick|full [--out DIR] [--workers 2] [--only PATTERN[,PATTERN...]]
-                             [--engine local|ray [--address ADDR]] [--allow-dirty]
-    python -m benchmarks.run --preset full --estimate [--only ...]  # core-hours per stage, run nothing
+                             [--engine local|ray [--address ADDR]] [--allow-dirty] [--shard I/N]
+    python -m benchmarks.run --preset full --estimate [--only ...] [--cores N[,N...]]  # core-hours, run nothing
     python -m benchmarks.run --reliability [--out DIR]      # the reliability test of the best policies
     python -m benchmarks.run --tune --preset P [--trials N] [--storage JOURNAL_OR_URL] [--only ...] [--engine ...]
     python -m benchmarks.report DIR                         # report.md and figures from the cell files
@@ -27,9 +27,12 @@ A sweep refuses to start when tracked files have uncommitted changes, unless ``-
 cell with the commit, :mod:`benchmarks.provenance`); ``DIR/runs.jsonl`` logs every invocation when it starts and
 when it ends, interrupted ones too.
 
+``--shard I/N`` runs shard I of the grid split N ways (:mod:`benchmarks.shards`), for N machines each with its
+own results folder; ``python -m benchmarks.merge`` puts the folders together for one report.
+
 ``--estimate`` prints what the preset (or its ``--only`` cells and studies) costs, per stage (the grid's main
 budgets, the long budgets, the equal wall-clock budget, the tuning stage) and env, in core-hours
-(:mod:`benchmarks.cost`), and runs nothing.
+(:mod:`benchmarks.cost`), and with ``--cores`` its wall time on that many cores; it runs nothing.
 
 ``--tune`` runs the tuning stage instead of the grid (:mod:`benchmarks.tuning`): one Optuna study per tuned learner
 and env of the preset, their best settings written to ``hyperparams/tuned/<env id>/<learner>.yml`` (``--tuned-dir``
@@ -49,7 +52,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks import cells
-from benchmarks.cost import estimate_text
+from benchmarks.cost import estimate_text, wall_text
 from benchmarks.execution import run_grid
 from benchmarks.engines import RayEngine
 from benchmarks.presets import PRESETS, Cell, build_cells, select
@@ -64,6 +67,7 @@ from benchmarks.provenance import (
     require_clean_tree,
 )
 from benchmarks.reliability import RELIABILITY_PLAYERS, run_reliability
+from benchmarks.shards import Shard
 from benchmarks.tuned import TUNED_DIR_VAR, resolve_tuned, tuned_dir
 from benchmarks.tuning import plan_studies, run_tuning
 from sb3_aac.common.output_files import check_writable_dir
@@ -82,6 +86,19 @@ def _positive_int(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
     return value
+
+
+def _positive_ints(text: str) -> list[int]:
+    """An argparse type: comma-separated whole numbers >= 1, at least one."""
+    return [_positive_int(part) for part in text.split(",")]
+
+
+def _shard(text: str) -> Shard:
+    """An argparse type: shard I of N (:meth:`benchmarks.shards.Shard.parse`)."""
+    try:
+        return Shard.parse(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _patterns(text: str) -> str:
@@ -103,9 +120,18 @@ def main(argv: list[str] | None = None) -> int:
         default=None,
         help="comma-separated glob patterns of cell ids (a plain word matches as a substring)",
     )
+    parser.add_argument(
+        "--shard",
+        type=_shard,
+        default=None,
+        help="run shard I of the grid split N ways (one per machine, each its own --out; then benchmarks.merge)",
+    )
     parser.add_argument("--list", action="store_true", help="list the cells (and whether they are finished), run nothing")
     parser.add_argument(
         "--estimate", action="store_true", help="print the core-hours per stage (grid, long, wall-clock, tuning), run nothing"
+    )
+    parser.add_argument(
+        "--cores", type=_positive_ints, default=None, help="with --estimate: also the wall time on N[,N...] cores"
     )
     parser.add_argument("--reliability", action="store_true", help="run the reliability test of the best policies in --out")
     parser.add_argument("--players", type=_positive_int, default=RELIABILITY_PLAYERS, help="players of the reliability test")
@@ -130,10 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tuned-dir", default=None, help="folder of the tuned settings (default: hyperparams/tuned)")
     args = parser.parse_args(argv)
     signal.signal(signal.SIGTERM, _exit_on_sigterm)  # `kill` runs the cleanup of run_grid (workers end with us)
-    if not args.preset and not args.reliability:
-        parser.error("give --preset (run the grid) and/or --reliability")
-    if args.address and args.engine != "ray":
-        parser.error("--address needs --engine ray")
+    _check_combinations(parser, args)
     tuning = _tuning_arguments(parser, args)
     if args.estimate or tuning:
         return (estimate if args.estimate else tune)(parser, args)
@@ -148,11 +171,7 @@ def main(argv: list[str] | None = None) -> int:
         shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv)
     )
     if args.preset:
-        every = build_cells(args.preset)
-        grid = select(every, args.only)
-        if not grid:
-            parser.error(f"--only {args.only!r} matches none of the {len(every)} cells of preset {args.preset!r} (see --list)")
-        grid = _with_tuned_settings(grid)
+        grid = _with_tuned_settings(_grid(parser, args))
         if args.list:
             for cell in grid:
                 print(f"{'done' if cells.is_finished(out, cell) else 'todo'}  {cell.cell_id}")
@@ -164,6 +183,7 @@ def main(argv: list[str] | None = None) -> int:
             "workers": args.workers,
             "engine": args.engine,
             "allow_dirty": args.allow_dirty,
+            **({"shard": str(args.shard)} if args.shard else {}),
         }
         try:
             with logged_invocation(out, invocation=invocation, **fields) as log:
@@ -194,6 +214,34 @@ def main(argv: list[str] | None = None) -> int:
     return 1 if args.preset and status["failed"] else 0
 
 
+def _check_combinations(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Exit (2) naming the problem if the options given do not go together."""
+    if not args.preset and not args.reliability:
+        parser.error("give --preset (run the grid) and/or --reliability")
+    if args.address and args.engine != "ray":
+        parser.error("--address needs --engine ray")
+    if args.cores and not args.estimate:
+        parser.error("--cores belongs to --estimate")
+    if args.shard and (args.estimate or args.tune or args.reliability):
+        parser.error(
+            "--shard splits the grid run only (not --estimate, --tune or --reliability; the reliability test runs on "
+            "the merged folder, see benchmarks.merge)"
+        )
+
+
+def _grid(parser: argparse.ArgumentParser, args: argparse.Namespace) -> list[Cell]:
+    """The preset's cells matching ``--only``, of ``--shard`` if given; exits (2) if there are none."""
+    every = build_cells(args.preset)
+    grid = select(every, args.only)
+    if not grid:
+        parser.error(f"--only {args.only!r} matches none of the {len(every)} cells of preset {args.preset!r} (see --list)")
+    if args.shard:
+        if len(grid) < args.shard.count:
+            parser.error(f"--shard {args.shard}: the grid has {len(grid)} cells, too few for {args.shard.count} shards")
+        grid = args.shard.cells(grid)
+    return grid
+
+
 def estimate(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     """``--estimate``: the preset's core-hours per stage and env (:func:`benchmarks.cost.estimate_text`)."""
     if not args.preset or args.reliability or args.list or args.tune:
@@ -202,6 +250,10 @@ def estimate(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
         parser.error(f"--only {args.only!r} matches none of the cells of preset {args.preset!r} (see --list)")
     print(f"Estimated cost of preset {args.preset!r}{f' (--only {args.only})' if args.only else ''}, core-hours:")
     print(estimate_text(args.preset, args.only))
+    if args.cores:
+        print("\nEstimated wall time on N cores (each core takes the longest cell or trial still waiting; the tuning "
+              "stage first):")  # fmt: skip
+        print(wall_text(args.preset, args.cores, args.only))
     return 0
 
 

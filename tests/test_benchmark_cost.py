@@ -72,3 +72,27 @@ def test_the_estimate_follows_only_and_refuses_a_pattern_that_matches_nothing(ca
     with pytest.raises(SystemExit) as info:
         bench_run.main(["--preset", "full", "--estimate", "--only", "no-such-cell"])
     assert info.value.code == 2 and "matches none of the cells" in capsys.readouterr().err
+
+
+def test_the_wall_time_on_n_cores_is_the_busiest_core_of_the_longest_first_pool():
+    # longest first on 2 cores: 3 | 3, then 2 to each, then the last 2 to the first: 7 s (a perfect split has 6)
+    assert cost.busiest_hours([3, 3, 2, 2, 2], 2) * 3600 == pytest.approx(7)
+    assert cost.busiest_hours([3, 3, 2, 2, 2], 1) * 3600 == pytest.approx(12)
+    assert cost.busiest_hours([3, 3, 2, 2, 2], 100) * 3600 == pytest.approx(3)
+    assert cost.busiest_hours([], 4) == 0
+    with pytest.raises(ValueError, match="bins must be >= 1"):
+        cost.busiest_hours([1.0], 0)
+
+
+def test_the_estimate_prints_the_wall_time_on_each_count_of_cores(capsys):
+    assert bench_run.main(["--preset", "full", "--estimate", "--cores", "1,8,64"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    core_hours = float(next(line for line in lines if line.startswith("total")).split()[-1])
+    table = lines[lines.index(next(line for line in lines if line.lstrip().startswith("cores"))) + 1 :]
+    minutes = {int(line.split()[0]): float(line.split()[-1]) for line in table}
+    assert set(minutes) == {1, 8, 64}
+    assert minutes[1] == pytest.approx(60 * core_hours, abs=0.6)  # one core runs everything one after the other
+    assert minutes[1] / 8 <= minutes[8] < minutes[1] / 8 + minutes[64]  # the pool's bound: sum / N + the longest
+    longest = max(cost.cell_seconds(c) for c in build_cells("full")) / 60
+    longest_trial = max(cost.trial_seconds(s) for s in plan_studies("full")) / 60
+    assert minutes[64] >= longest + longest_trial - 0.05  # no core count beats the longest cell and trial (printed to 0.1)
