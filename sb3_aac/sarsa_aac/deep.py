@@ -58,6 +58,9 @@ from sb3_aac.runtime.forward import NetworkForward
 LAYER_NORM_EPS = 1e-5
 LEAKY_SLOPE = 0.01
 DEFAULT_SPARSITY = 0.9
+# The most lanes whose steps are summed on the same weights (module docstring, "Lanes"): SarsaAAC updates more lanes
+# in chunks of this many, one chunk after another, each on the weights the earlier chunks left.
+LANE_CHUNK = 16
 # Added to the observations' running variance before its square root (Elsayed et al. 2024 use 1e-8).
 OBS_VARIANCE_EPS = 1e-8
 MAX_HIDDEN_UNITS = 4096
@@ -96,22 +99,26 @@ class DeepCache(NamedTuple):
 
 class DeepTraces:
     """
-    The eligibility traces of the action-type actor's and the critic's networks, one per lane: per linear layer, a
-    weight trace ``(n, out, in)`` and a bias trace ``(n, out)``; they decay by ``decay = gamma * lambda`` per step.
-
-    :param n_lanes: number of lanes ``n``
-    :param shapes: per traced network, its linear layers' weight shapes ``(out, in)``
-    :param decay: ``gamma * lambda``
+    The eligibility traces of the action-type actor's and the critic's networks, one per lane: per traced network
+    ``i`` and linear layer, a weight trace ``(n, out, in)`` (``weights[i]``) and a bias trace ``(n, out)``
+    (``biases[i]``); they decay by ``decay = gamma * lambda`` per step.
     """
 
-    def __init__(self, n_lanes: int, shapes: dict[int, list[tuple[int, int]]], decay: float):
-        self.decay = decay
-        self.weights: dict[int, list[np.ndarray]] = {
-            i: [np.zeros((n_lanes, *shape)) for shape in layer_shapes] for i, layer_shapes in shapes.items()
-        }
-        self.biases: dict[int, list[np.ndarray]] = {
-            i: [np.zeros((n_lanes, shape[0])) for shape in layer_shapes] for i, layer_shapes in shapes.items()
-        }
+    def __init__(self, weights: dict[int, list[np.ndarray]], biases: dict[int, list[np.ndarray]], decay: float):
+        self.weights, self.biases, self.decay = weights, biases, decay
+
+    @classmethod
+    def zeros(cls, n_lanes: int, shapes: dict[int, list[tuple[int, int]]], decay: float) -> DeepTraces:
+        """Zero traces of ``n_lanes`` lanes; ``shapes``: per traced network, its linear layers' ``(out, in)``."""
+        weights = {i: [np.zeros((n_lanes, *shape)) for shape in layer_shapes] for i, layer_shapes in shapes.items()}
+        biases = {i: [np.zeros((n_lanes, shape[0])) for shape in layer_shapes] for i, layer_shapes in shapes.items()}
+        return cls(weights, biases, decay)
+
+    def lanes(self, lanes: slice) -> DeepTraces:
+        """The traces of a range of lanes, as views (a step on them updates these)."""
+        weights = {i: [trace[lanes] for trace in traces] for i, traces in self.weights.items()}
+        biases = {i: [trace[lanes] for trace in traces] for i, traces in self.biases.items()}
+        return DeepTraces(weights, biases, self.decay)
 
     def clear(self, lanes: np.ndarray) -> None:
         """Zero the traces of ``lanes`` (their episodes ended)."""
@@ -237,7 +244,7 @@ class DeepBank(NumpyBank):
             for i, role in enumerate(self.roles)
             if role != "params"
         }
-        return DeepTraces(n_lanes, shapes, decay)
+        return DeepTraces.zeros(n_lanes, shapes, decay)
 
 
 class DeepKernel(NetworkForward):

@@ -16,7 +16,7 @@ from sb3_aac.common.hyperparameters import check_finite, check_fraction, check_u
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
-from sb3_aac.sarsa_aac.deep import DeepKernel, DeepTraces
+from sb3_aac.sarsa_aac.deep import LANE_CHUNK, DeepKernel, DeepTraces
 from sb3_aac.sarsa_aac.exploration import TYPE_EXPLORATIONS, select_types
 from sb3_aac.sarsa_aac.kernels import Kernel
 from sb3_aac.sarsa_aac.monitoring import TRAIN_STAT_FIELDS, TrainingMonitor
@@ -462,28 +462,85 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
     def _train_step(
         self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]], any_done: bool
     ) -> None:
-        """One SARSA-AAC update of every approximator, for all envs at once; then choose the next action."""
-        policy, kernel, gamma = self.policy, self._kernel, self.gamma
+        """
+        One SARSA-AAC update of every approximator for all envs, then choose the next action. A deep policy's lanes
+        are updated in chunks of at most :data:`~sb3_aac.sarsa_aac.deep.LANE_CHUNK`, one after another.
+        """
         obs, k, params = self._pending  # type: ignore[misc]
-        n, vi, ps = len(k), policy.value_index, policy.param_slice
-        rows = self._rows if len(self._rows) == n else np.arange(n)
+        n = len(k)
         if self._current_progress_remaining < self._schedule_progress - SCHEDULE_RESOLUTION:
             self._update_schedules()
 
         # An owned float64 copy: kept until the next step (a VecEnv may reuse its buffer) and no mixed dtypes.
         next_obs = new_obs.astype(np.float64).reshape(n, -1)
-        discount = np.where(dones, 0.0, gamma)
+        discount = np.where(dones, 0.0, self.gamma)
         # Time-limit truncations bootstrap from the terminal observation (new_obs already holds the reset one).
-        truncated = [i for i in np.flatnonzero(dones) if infos[i].get("TimeLimit.truncated", False)] if any_done else []
-        if truncated:
-            terminal_obs = np.stack([np.ravel(infos[i]["terminal_observation"]) for i in truncated])
-            batch = np.concatenate((obs, next_obs, terminal_obs))
-        else:
-            batch = np.concatenate((obs, next_obs))
+        truncated = [int(i) for i in np.flatnonzero(dones) if infos[i].get("TimeLimit.truncated", False)] if any_done else []
+        terminal_obs = {i: np.ravel(infos[i]["terminal_observation"]) for i in truncated}
         rewards = rewards.astype(np.float64)  # mixed float32/float64 arithmetic costs more than this cast
         # Before the forward pass: it may put the weights into return units, and s' normalised with itself.
         self._track_return_scale(rewards, dones)
         self._observe(next_obs)
+        chunk = LANE_CHUNK if isinstance(self._kernel, DeepKernel) else n
+        if chunk >= n:
+            next_k, next_params, stats = self._update_lanes(
+                obs, k, params, rewards, next_obs, discount, terminal_obs, self._traces
+            )
+        else:
+            assert self._traces is None or isinstance(self._traces, DeepTraces)
+            parts = []
+            for start in range(0, n, chunk):
+                lanes = slice(start, start + chunk)
+                chunk_terminal_obs = {i - start: o for i, o in terminal_obs.items() if start <= i < start + chunk}
+                chunk_traces = None if self._traces is None else self._traces.lanes(lanes)
+                parts.append(
+                    self._update_lanes(
+                        obs[lanes],
+                        k[lanes],
+                        params[lanes],
+                        rewards[lanes],
+                        next_obs[lanes],
+                        discount[lanes],
+                        chunk_terminal_obs,
+                        chunk_traces,
+                    )
+                )
+            next_k, next_params = np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+            stats = tuple(np.concatenate(columns) for columns in zip(*(p[2] for p in parts), strict=True))
+        if any_done and self._traces is not None:
+            self._traces.clear(np.flatnonzero(dones))
+        self._n_updates += 1
+
+        self._pending = (next_obs, next_k, next_params)
+        self._td_chunks.append(stats)
+        if len(self._td_chunks) >= CHECK_INTERVAL:
+            self._flush_td_chunks()
+            self._keep_finite_weights()
+
+    def _update_lanes(
+        self,
+        obs: np.ndarray,
+        k: np.ndarray,
+        params: np.ndarray,
+        rewards: np.ndarray,
+        next_obs: np.ndarray,
+        discount: np.ndarray,
+        terminal_obs: dict[int, np.ndarray],
+        traces: TileTraces | DeepTraces | None,
+    ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, ...]]:
+        """
+        The update of a batch of lanes on the current weights (errors measured before any of their steps).
+
+        :param terminal_obs: the terminal observations of the truncated lanes, by their row in the batch
+        :param traces: the batch's eligibility traces (views), or None
+        :return: the next types and parameters chosen at ``next_obs``, and the TD statistics
+            ``(delta, q_error, k, params, V(s))``
+        """
+        policy, kernel = self.policy, self._kernel
+        n, vi, ps = len(k), policy.value_index, policy.param_slice
+        rows = self._rows if len(self._rows) == n else np.arange(n)
+        truncated = list(terminal_obs)
+        batch = np.concatenate((obs, next_obs, *([np.stack(list(terminal_obs.values()))] if truncated else [])))
         # One forward pass for s (weights as they are now), s' and the terminal observations.
         out, cache = kernel.forward(batch)
         if not math.isfinite(out.sum()):  # one reduction catches NaN and inf before an action is chosen from them
@@ -496,7 +553,8 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
             terminal = out[2 * n :]
             v_next[truncated] = terminal[:, vi]
             q_next[truncated] = terminal[np.arange(len(truncated)), self._explore(terminal)[0]]
-            discount[truncated] = gamma
+            discount = discount.copy()
+            discount[truncated] = self.gamma
 
         delta = rewards + discount * v_next - current[:, vi]
         q_error = rewards + discount * q_next - current[rows, k]
@@ -511,24 +569,14 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
             )
         err[:, vi] = delta
         if isinstance(kernel, DeepKernel):
-            assert self._traces is None or isinstance(self._traces, DeepTraces)
-            kernel.update(cache, err, self._lr, self._hidden_gain, k, self._traces)
-            if any_done and self._traces is not None:
-                self._traces.clear(np.flatnonzero(dones))
-        elif self._traces is None:
+            assert traces is None or isinstance(traces, DeepTraces)
+            kernel.update(cache, err, self._lr, self._hidden_gain, k, traces)
+        elif traces is None:
             kernel.update(cache, err, self._lr, self._hidden_gain)
         else:
-            assert isinstance(kernel, TileKernel) and isinstance(self._traces, TileTraces)  # checked in _setup_model
-            kernel.update_traced(cache, err, self._lr, self._trace_hits[k], self._traces)
-            if any_done:
-                self._traces.clear(np.flatnonzero(dones))
-        self._n_updates += 1
-
-        self._pending = (next_obs, next_k, next_params)
-        self._td_chunks.append((delta, q_error, k, params, current[:, vi]))
-        if len(self._td_chunks) >= CHECK_INTERVAL:
-            self._flush_td_chunks()
-            self._keep_finite_weights()
+            assert isinstance(kernel, TileKernel) and isinstance(traces, TileTraces)  # checked in _setup_model
+            kernel.update_traced(cache, err, self._lr, self._trace_hits[k], traces)
+        return next_k, next_params, (delta, q_error, k, params, current[:, vi])
 
     # ------------------------------------------------------------------ return scale
 
