@@ -85,8 +85,11 @@ from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
 
 # name: (policy, policy_kwargs)
 POLICIES: dict[str, tuple[str, dict[str, Any]]] = {
+    "mlp": ("MlpPolicy", {}),
     "mlp2": ("MlpPolicy", {"hidden_units": 2}),
+    "rbfmlp": ("RbfMlpPolicy", {}),
     "rbfmlp2": ("RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 2}),
+    "rbf": ("RbfPolicy", {}),
     "rbf10": ("RbfPolicy", {"n_rbf": 10}),
     "rbf50": ("RbfPolicy", {"n_rbf": 50}),
     "tile": ("TilePolicy", {}),
