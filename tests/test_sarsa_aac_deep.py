@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 import torch as th
@@ -166,7 +168,7 @@ def test_lanes_beyond_a_chunk_are_updated_chunk_after_chunk(trace_lambda: float,
     model.learn(n, reset_num_timesteps=False)
     assert [rows for rows, _ in calls] == [2 * LANE_CHUNK, 2 * LANE_CHUNK, 2 * 3]
     weights = [w for _, w in calls] + [model.policy.parameters_to_vector()]
-    assert all(not np.array_equal(before, after) for before, after in zip(weights, weights[1:]))
+    assert all(not np.array_equal(before, after) for before, after in itertools.pairwise(weights))
 
 
 def test_a_chunk_of_lanes_is_one_forward_pass(monkeypatch: pytest.MonkeyPatch) -> None:
