@@ -430,6 +430,16 @@ def test_report_from_synthetic_cells(tmp_path):
         assert (tmp_path / name).stat().st_size > 10_000, name
 
 
+def test_every_domain_has_a_title_and_reach_marks_in_the_report():
+    """A results folder of any preset's env can be reported (the HFO preset's once failed on a missing mark)."""
+    from benchmarks.report_text import env_title, reach_marks
+
+    for env_id in ENV_IDS:
+        low, high = reach_marks(env_id)
+        assert low < high
+        assert env_title(env_id).startswith(f"{env_id} (")
+
+
 def test_report_covers_the_new_learners_and_domains(tmp_path):
     """DeepPolicy and HybridPPO cells, Goal (ranked by P(goal)) and Moving (returns that start below 0): their tables,
     published figures, verdicts and figures; each cell's settings as the runner records them."""
