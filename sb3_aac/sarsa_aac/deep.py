@@ -31,10 +31,12 @@ exactly. The lanes' steps are added (as ``n`` steps taken one after another woul
 where that sum would carry the batch past the minimum of its squared errors along the summed step's direction (to
 first order: ``t* = sum_i delta_i c_i / sum_i c_i**2 < 1``, ``c_i`` the change of sample ``i``'s output), it is
 shortened to ``t*`` (one factor per network and step). So steps of similar samples cannot overshoot together, while
-samples that pull apart keep their own steps. What does not hold: the lanes' TD errors are all measured before any of
-their steps, so the curve per env step is the same only to first order; measured on the navigation env (seed 0), 1 and
-16 lanes both solve it after 30k env steps (0.995 and 0.970 success), but 16 lanes lag early (0.305 against 0.675
-after 8k).
+samples that pull apart keep their own steps. At most :data:`LANE_CHUNK` lanes are summed so: more lanes are updated
+in chunks of that many, one chunk after another, each chunk's errors measured on the weights the earlier chunks left
+(one summed step for 256 similar lanes would shrink to about one sample's step). What does not hold: within a chunk
+the TD errors are all measured before any of its steps, so the curve per env step is the same only to first order;
+measured on the navigation env (seed 0), 1 and 16 lanes both solve it after 30k env steps (0.995 and 0.970
+success), but 16 lanes lag early (0.305 against 0.675 after 8k).
 
 The parameters are float64 torch tensors (for SB3's save/load); the forward pass is
 :class:`sb3_aac.runtime.forward.NetworkForward` (the exported runtime's code) and :class:`DeepKernel` adds the
