@@ -482,29 +482,13 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
         self._track_return_scale(rewards, dones)
         self._observe(next_obs)
         chunk = LANE_CHUNK if isinstance(self._kernel, DeepKernel) else n
-        if chunk >= n:
-            next_k, next_params, stats = self._update_lanes(
-                obs, k, params, rewards, next_obs, discount, terminal_obs, self._traces
-            )
+        parts = [
+            self._update_lanes(slice(start, start + chunk), obs, k, params, rewards, next_obs, discount, terminal_obs)
+            for start in range(0, n, chunk)
+        ]
+        if len(parts) == 1:
+            next_k, next_params, stats = parts[0]
         else:
-            assert self._traces is None or isinstance(self._traces, DeepTraces)
-            parts = []
-            for start in range(0, n, chunk):
-                lanes = slice(start, start + chunk)
-                chunk_terminal_obs = {i - start: o for i, o in terminal_obs.items() if start <= i < start + chunk}
-                chunk_traces = None if self._traces is None else self._traces.lanes(lanes)
-                parts.append(
-                    self._update_lanes(
-                        obs[lanes],
-                        k[lanes],
-                        params[lanes],
-                        rewards[lanes],
-                        next_obs[lanes],
-                        discount[lanes],
-                        chunk_terminal_obs,
-                        chunk_traces,
-                    )
-                )
             next_k, next_params = np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
             stats = tuple(np.concatenate(columns) for columns in zip(*(p[2] for p in parts), strict=True))
         if any_done and self._traces is not None:
@@ -519,6 +503,7 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
 
     def _update_lanes(
         self,
+        lanes: slice,
         obs: np.ndarray,
         k: np.ndarray,
         params: np.ndarray,
@@ -526,21 +511,26 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
         next_obs: np.ndarray,
         discount: np.ndarray,
         terminal_obs: dict[int, np.ndarray],
-        traces: TileTraces | DeepTraces | None,
     ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, ...]]:
         """
-        The update of a batch of lanes on the current weights (errors measured before any of their steps).
+        The update of the env step's ``lanes`` on the current weights (errors measured before any of their steps).
 
-        :param terminal_obs: the terminal observations of the truncated lanes, by their row in the batch
-        :param traces: the batch's eligibility traces (views), or None
-        :return: the next types and parameters chosen at ``next_obs``, and the TD statistics
+        :param terminal_obs: the terminal observations of the truncated lanes, by lane
+        :return: the lanes' next types and parameters chosen at ``next_obs``, and their TD statistics
             ``(delta, q_error, k, params, V(s))``
         """
         policy, kernel = self.policy, self._kernel
+        start = lanes.start
+        obs, k, params, rewards, next_obs = obs[lanes], k[lanes], params[lanes], rewards[lanes], next_obs[lanes]
+        discount = discount[lanes]  # a view: the truncated lanes' entries are set below (the step's array is not reused)
         n, vi, ps = len(k), policy.value_index, policy.param_slice
         rows = self._rows if len(self._rows) == n else np.arange(n)
-        truncated = list(terminal_obs)
-        batch = np.concatenate((obs, next_obs, *([np.stack(list(terminal_obs.values()))] if truncated else [])))
+        truncated = [i - start for i in terminal_obs if start <= i < start + n]
+        traces = self._traces
+        if traces is not None and n < self.n_envs:
+            assert isinstance(traces, DeepTraces)  # only a deep policy's lanes are split (LANE_CHUNK)
+            traces = traces.lanes(lanes)
+        batch = np.concatenate((obs, next_obs, *[terminal_obs[start + i][None] for i in truncated]))
         # One forward pass for s (weights as they are now), s' and the terminal observations.
         out, cache = kernel.forward(batch)
         if not math.isfinite(out.sum()):  # one reduction catches NaN and inf before an action is chosen from them
@@ -553,7 +543,6 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
             terminal = out[2 * n :]
             v_next[truncated] = terminal[:, vi]
             q_next[truncated] = terminal[np.arange(len(truncated)), self._explore(terminal)[0]]
-            discount = discount.copy()
             discount[truncated] = self.gamma
 
         delta = rewards + discount * v_next - current[:, vi]
