@@ -498,7 +498,7 @@ HFO_STUDY: dict[str, Any] = {
         HFO_ID: {
             "budget": 1_500_000,
             "runs": _runs(PAPER_SEEDS, "SarsaAAC-deep"),
-            "wall_clock": {"seconds": HFO_SECONDS, "runs": _runs(FEW_SEEDS[:2], "MPDQN", "PDQN", "HybridPPO", "PPO", "TD3")},
+            "wall_clock": {"seconds": HFO_SECONDS, "runs": _runs(PAPER_SEEDS, "MPDQN", "PDQN", "HybridPPO", "PPO", "TD3")},
             "eval_every": 2500,
             "eval_episodes": 50,
         },
