@@ -491,7 +491,7 @@ HPPO_STUDY: dict[str, Any] = {
 # too slowly there) at 1.5M env steps (~15,000 trials, ~90 s of training on one core), and the torch learners and
 # baselines given HFO_SECONDS of training each, the wall-clock view of "within 10 minutes of one core" at the size one
 # machine affords (their env-step horizon is what they step in those seconds: MP-DQN ~75k, 2-4 % of its published
-# 20,000 episodes). The peers run their constructor defaults (no hyperparams entry for HFO).
+# 20,000 episodes). The peers run their constructor defaults (no hyperparams entry for HFO), on 5 seeds each.
 HFO_SECONDS = 300
 HFO_STUDY: dict[str, Any] = {
     "envs": {
