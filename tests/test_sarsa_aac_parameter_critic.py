@@ -105,6 +105,7 @@ def test_critic_follows_the_mean_where_cacla_follows_the_majority(parameter_upda
         policy_kwargs=dict(hidden_units=None),
         learning_rate=0.02,  # the critics average over about 50 samples
         parameter_update=parameter_update,
+        replay_ratio=0,  # the two update rules alone
         seed=0,
     )
     model.learn(3000)

@@ -71,6 +71,7 @@ class ParameterCritic(nn.Module):
         rate: float,
         hidden_gain: float,
         noise_scale: float,
+        observe: bool = True,
     ) -> np.ndarray:
         """
         One step of the critic on a batch, and the parameter actor's errors (its CACLA targets where the critic says
@@ -84,12 +85,14 @@ class ParameterCritic(nn.Module):
         :param rate: the critic's normalised learning rate, in ``[0, 1]``
         :param hidden_gain: the factor on hidden-layer steps, ``1 / return_scale**2`` (see :class:`sb3_aac.SarsaAAC`)
         :param noise_scale: ``sigma``, the standard deviation of the exploration noise on the scaled parameters (0: 1)
+        :param observe: whether a deep critic folds ``obs`` into its input normalisation (False for replayed samples,
+            which it has seen)
         :return: ``(n, P)`` target minus output of the parameter actor: ``x - mu`` on type ``k``'s parameters where
             ``g_k(s) . (x - mu) > 0``, else 0 (with ``noise_scale`` 0 the executed parameters are ``mu``: no step)
         :raises FloatingPointError: if the critic's outputs are not finite
         """
         model = self.approximators
-        if isinstance(model, DeepPolicy):
+        if observe and isinstance(model, DeepPolicy):
             model.approximators.observe(obs)
         kernel = model.kernel()
         out, cache = kernel.forward(obs)

@@ -48,6 +48,9 @@ class SarsaAACPolicy(BasePolicy):
 
     # SarsaAAC's learning rates when none is given: the step each family was tuned with (see SarsaAAC's docstring).
     default_learning_rate: ClassVar[float] = 0.1
+    # SarsaAAC's replay_ratio when none is given: replayed transitions per live one where replay wins per second as
+    # well as per sample on the paper env (docs/sarsa_aac_results.md, "Replay of recent transitions"), else 0.
+    default_replay_ratio: ClassVar[int] = 0
 
     def __init__(
         self,
@@ -259,6 +262,8 @@ class MlpPolicy(DenseBankPolicy):
     are :class:`DenseBankPolicy`'s.
     """
 
+    default_replay_ratio: ClassVar[int] = 2
+
     def __init__(
         self,
         observation_space: spaces.Space[Any],
@@ -278,6 +283,8 @@ class RbfMlpPolicy(DenseBankPolicy):
     ``n_rbf`` Gaussians (10 in the paper, the default) and those feed one hidden tanh layer (2, 10 or 20 units in
     the paper; the default 10 is ours). The arguments are :class:`DenseBankPolicy`'s.
     """
+
+    default_replay_ratio: ClassVar[int] = 2
 
     def __init__(
         self,
