@@ -82,6 +82,8 @@ _SARSA_AAC = {
     "param_noise_final": FloatDistribution(0.0, 0.1),
 }
 _RBF_WIDTH = FloatDistribution(0.5, 2.0)
+# The MLP families replay recent transitions by default (2 per live one); 0 is the paper's update.
+_SARSA_AAC_REPLAY = {**_SARSA_AAC, "replay_ratio": IntDistribution(0, 4)}
 
 # P-DQN / MP-DQN: the ranges span the reference MP-DQN code's settings (Bester et al. 2019: Adam 1e-3 / 1e-4, Polyak
 # 0.1 / 0.001, gamma 0.9 on Platform, minibatch 128) and hyperparams/<algo>.yml's dribbling settings by a factor of
@@ -118,9 +120,9 @@ _HPPO = {
 SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
     ("pdqn", "MlpPolicy"): SearchSpace(_PDQN),
     ("mpdqn", "MlpPolicy"): SearchSpace(_PDQN),
-    ("sarsa_aac", "MlpPolicy"): SearchSpace(_SARSA_AAC, {"hidden_units": IntDistribution(2, 40, log=True)}),
+    ("sarsa_aac", "MlpPolicy"): SearchSpace(_SARSA_AAC_REPLAY, {"hidden_units": IntDistribution(2, 40, log=True)}),
     ("sarsa_aac", "RbfMlpPolicy"): SearchSpace(
-        _SARSA_AAC,
+        _SARSA_AAC_REPLAY,
         {"n_rbf": IntDistribution(5, 30), "hidden_units": IntDistribution(2, 20, log=True), "rbf_width": _RBF_WIDTH},
     ),
     ("sarsa_aac", "RbfPolicy"): SearchSpace(_SARSA_AAC, {"n_rbf": IntDistribution(5, 80), "rbf_width": _RBF_WIDTH}),
