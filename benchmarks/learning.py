@@ -78,23 +78,24 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from benchmarks import adapters, domains
 from benchmarks.groups import scalar_ci
-from benchmarks.presets import EVAL_SEED, FINAL_SEED
+from benchmarks.presets import EVAL_SEED, FINAL_SEED, PAPER_UPDATE
 from benchmarks.significance import target_verdict
 from sb3_aac import SarsaAAC, SelectObservation
 from sb3_aac.common.checkpoints import GreedyCheckpoints
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
 
-# name: (policy, policy_kwargs)
-POLICIES: dict[str, tuple[str, dict[str, Any]]] = {
-    "mlp": ("MlpPolicy", {}),
-    "mlp2": ("MlpPolicy", {"hidden_units": 2}),
-    "rbfmlp": ("RbfMlpPolicy", {}),
-    "rbfmlp2": ("RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 2}),
-    "rbf": ("RbfPolicy", {}),
-    "rbf10": ("RbfPolicy", {"n_rbf": 10}),
-    "rbf50": ("RbfPolicy", {"n_rbf": 50}),
-    "tile": ("TilePolicy", {}),
-    "deep": ("DeepPolicy", {}),
+# name: (policy, policy_kwargs, SarsaAAC keyword arguments beyond its defaults); the paper's configurations (mlp2,
+# rbfmlp2, rbf10, rbf50) run the paper's update, the others the shipped defaults.
+POLICIES: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
+    "mlp": ("MlpPolicy", {}, {}),
+    "mlp2": ("MlpPolicy", {"hidden_units": 2}, PAPER_UPDATE),
+    "rbfmlp": ("RbfMlpPolicy", {}, {}),
+    "rbfmlp2": ("RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 2}, PAPER_UPDATE),
+    "rbf": ("RbfPolicy", {}, {}),
+    "rbf10": ("RbfPolicy", {"n_rbf": 10}, {}),
+    "rbf50": ("RbfPolicy", {"n_rbf": 50}, {}),
+    "tile": ("TilePolicy", {}, {}),
+    "deep": ("DeepPolicy", {}, {}),
 }
 
 
@@ -302,8 +303,9 @@ def build(
     make_env, lanes, _, kwargs, _ = TASKS[task]
     if rate is not None:
         kwargs = {**kwargs, "learning_rate": rate, "q_learning_rate": rate, "param_learning_rate": rate}
-    policy, policy_kwargs = POLICIES[policy_name]
-    return SarsaAAC(policy, make_env(n_envs or lanes, seed), seed=seed, policy_kwargs=policy_kwargs, **{**kwargs, **settings})
+    policy, policy_kwargs, config_kwargs = POLICIES[policy_name]
+    kwargs = {**kwargs, **config_kwargs, **settings}
+    return SarsaAAC(policy, make_env(n_envs or lanes, seed), seed=seed, policy_kwargs=policy_kwargs, **kwargs)
 
 
 def run(

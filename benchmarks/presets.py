@@ -60,16 +60,19 @@ RELIABILITY_SEED = 30_000  # the reliability test (10,000 fresh players, one epi
 
 SARSA_N_ENVS = 16  # lanes for SarsaAAC (the quick start's setting)
 
+# The paper's update for its configurations: without the replay the MLP families take by default (SarsaAAC's
+# replay_ratio), so that they reproduce the paper's figures.
+PAPER_UPDATE: dict[str, Any] = {"replay_ratio": 0}
 # name: (family, policy, policy_kwargs, SarsaAAC keyword arguments beyond its defaults)
 SARSA_CONFIGS: dict[str, tuple[str, str, dict[str, Any], dict[str, Any]]] = {
     "tile": ("Tiles", "TilePolicy", {}, {}),
     "deep": ("Deep", "DeepPolicy", {}, {}),
-    "mlp2": ("MLP", "MlpPolicy", {"hidden_units": 2}, {}),
-    "mlp10": ("MLP", "MlpPolicy", {"hidden_units": 10}, {}),
-    "mlp20": ("MLP", "MlpPolicy", {"hidden_units": 20}, {}),
-    "rbfmlp2": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 2}, {}),
-    "rbfmlp10": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 10}, {}),
-    "rbfmlp20": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 20}, {}),
+    "mlp2": ("MLP", "MlpPolicy", {"hidden_units": 2}, PAPER_UPDATE),
+    "mlp10": ("MLP", "MlpPolicy", {"hidden_units": 10}, PAPER_UPDATE),
+    "mlp20": ("MLP", "MlpPolicy", {"hidden_units": 20}, PAPER_UPDATE),
+    "rbfmlp2": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 2}, PAPER_UPDATE),
+    "rbfmlp10": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 10}, PAPER_UPDATE),
+    "rbfmlp20": ("MLP+RBF", "RbfMlpPolicy", {"n_rbf": 10, "hidden_units": 20}, PAPER_UPDATE),
     "rbf10": ("RBF", "RbfPolicy", {"n_rbf": 10}, {}),
     "rbf30": ("RBF", "RbfPolicy", {"n_rbf": 30}, {}),
     "rbf50": ("RBF", "RbfPolicy", {"n_rbf": 50}, {}),

@@ -72,10 +72,12 @@ steps (TD3's replay buffer fills past ``learning_starts``, numba and numpy warm 
 timed; the figure is the best of ``--repeats`` timings. One torch and one BLAS thread.
 
 Usage: ``python -m benchmarks.speed.training deep [--env navigation|RoboCupDribblePaper-v0] [--steps 3000] [--lanes 16]
-[--parameter-update cacla|critic]`` (SarsaAAC's ``parameter_update``: the paper's CACLA, the default, or with the
-critic of the parameters)
+[--parameter-update cacla|critic] [--policy DeepPolicy] [--set KEY=VALUE ...]`` (SarsaAAC's ``parameter_update``: the
+paper's CACLA, the default, or with the critic of the parameters). ``--policy`` times another SarsaAAC policy in
+DeepPolicy's place, with its defaults (DeepPolicy with ``trace_lambda=0.8``); ``--set`` overrides SarsaAAC's
+arguments, e.g. ``--policy MlpPolicy --set replay_ratio=0`` against the default replay.
 
-Target: ``DeepPolicy`` >= 5x TD3's env steps per second on the same env. Single runs on a shared machine:
+Target: every SarsaAAC policy >= 10x TD3's env steps per second on the paper env. Single runs on a shared machine:
 report the load average (printed) with the numbers."""
 
 HPPO_DOC = """Training throughput (env steps per second) of HybridPPO next to SB3's PPO on the same env with the same network
@@ -271,8 +273,12 @@ def deep_main(argv: list[str]) -> None:
     parser.add_argument("--repeats", type=int, default=2, help="timed runs (the best is reported)")
     parser.add_argument("--lanes", type=int, default=16, help="lanes of the second DeepPolicy run")
     parser.add_argument("--parameter-update", default="cacla", help="SarsaAAC's parameter_update: cacla or critic")
+    parser.add_argument("--policy", default="DeepPolicy", help="the SarsaAAC policy timed")
+    parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="SarsaAAC keyword arguments")
     args = parser.parse_args(argv)
     th.set_num_threads(1)
+    settings = {"trace_lambda": 0.8} if args.policy == "DeepPolicy" else {}
+    settings |= {key: ast.literal_eval(value) for key, value in (item.split("=", 1) for item in args.set)}
     env_id = NavigationEnv if args.env == "navigation" else args.env
     print(f"env steps/s on {args.env} (best of {args.repeats} x {args.steps} steps; load average {load_average():.2f})")
 
@@ -281,9 +287,10 @@ def deep_main(argv: list[str]) -> None:
     print(f"{'TD3 (1 lane, 1 gradient step per transition)':64s} {td3:10.0f}")
     for lanes in (1, args.lanes):
         env = make_vec_env(env_id, n_envs=lanes, seed=0)
-        model = SarsaAAC("DeepPolicy", env, seed=0, trace_lambda=0.8, parameter_update=args.parameter_update)
+        model = SarsaAAC(args.policy, env, seed=0, parameter_update=args.parameter_update, **settings)
         deep = steps_per_second(model, args.steps, args.warmup, args.repeats)
-        name = f"SarsaAAC DeepPolicy ({lanes} lanes, trace_lambda=0.8, {args.parameter_update})"
+        described = ", ".join(f"{key}={value}" for key, value in settings.items())
+        name = f"SarsaAAC {args.policy} ({lanes} lanes, {described + ', ' if described else ''}{args.parameter_update})"
         print(f"{name:64s} {deep:10.0f}   {deep / td3:6.1f}x TD3")
 
 
