@@ -18,7 +18,8 @@ The learner's targets (lane count, past the hand-coded dribbler), each with ``--
   ``--only v19-tile --steps 5000000 --vs-dribbler`` (25.4 m);
 - the lane count: ``--only paper-tile --n-envs 1``, ``--n-envs 16`` and ``--n-envs 256`` (150k steps: within 1.0 m
   of each other, each 25 m), and the same for every shipped policy's defaults (``paper-deep``, ``paper-mlp``,
-  ``paper-rbf``, ``paper-rbfmlp``); ``--only paperid-tile`` (``SarsaAAC("TilePolicy", "RoboCupDribblePaper-v0")``: one
+  ``paper-rbf``, ``paper-rbfmlp``; ``--set replay_ratio=0`` or ``=2`` for the replay study, docs/sarsa_aac_results.md
+  "Replay of recent transitions"); ``--only paperid-tile`` (``SarsaAAC("TilePolicy", "RoboCupDribblePaper-v0")``: one
   lane, the registered id, 25 m) and ``--only paperid-rbf10`` (21 m);
 - ``--only platform-tile --steps 20000 --n-envs 4`` and ``--n-envs 16`` (0.98); ``--only platform-rbf10 --steps
   300000`` (0.98); ``--only paper-mlp2 --steps 700000`` (16 m within 40,000 episodes).
