@@ -3,10 +3,11 @@
 Every number here is our choice; the reasons are next to them. A cell is plain data (:class:`Cell`), so it can be
 sent to a worker process and written into its result file as is.
 
-Seven domains (:mod:`benchmarks.domains`; the full preset runs six): the dribbling envs of both server eras, Platform-v0 (PyPI
-``hybrid-platform``, Masson et al.'s Platform) and the ``hybrid_domains`` Goal-v0, Moving-v0, Sliding-v0 and
-CatchPoint-v0, each with its own budget. What a preset costs: ``python -m benchmarks.run --preset P --estimate``
-(:mod:`benchmarks.cost`, from :data:`STEPS_PER_SECOND` and :data:`ENV_STEP_SECONDS`).
+Eight domains (:mod:`benchmarks.domains`; the full preset runs seven, Half Field Offense has its own): the dribbling
+envs of both server eras, Platform-v0 (PyPI ``hybrid-platform``, Masson et al.'s Platform) and the ``hybrid_domains``
+Goal-v0, Moving-v0, Sliding-v0 and CatchPoint-v0, each with its own budget. What a preset costs: ``python -m
+benchmarks.run --preset P --estimate`` (:mod:`benchmarks.cost`, from :data:`STEPS_PER_SECOND` and
+:data:`ENV_STEP_SECONDS`).
 
 SarsaAAC configs (:data:`SARSA_CONFIGS`): the recommended ``TilePolicy`` with its defaults, ``DeepPolicy``, and the
 paper's three families (Uc-Cetina 2013, Figs. 5-7), all other hyperparameters at the SarsaAAC defaults (16 lanes):
@@ -333,10 +334,11 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners.
 #
-# Sliding-v0 (Moving's variant with inertia, no published figure) is not in this regeneration. Budgets: 50k env steps on
+# Sliding-v0 (Moving's variant with inertia, no published figure) runs as Moving-v0 does. Budgets: 50k env steps on
 # dribbling (~3,500 SarsaAAC episodes), 20k on Platform; Goal-v0 60k (the reference MP-DQN code's ~20,000 episodes,
 # after which Bester et al. report P(goal) 0.789; HyAR-TD3's figure is TD3-based); CatchPoint-v0 50k (~3,000
-# episodes of at most 25 steps); Moving-v0 100k (~1,000 episodes of at most 200 steps; H-PPO's ~1.7 is after 3M).
+# episodes of at most 25 steps); Moving-v0 and Sliding-v0 100k (~1,000 episodes of at most 200 steps; H-PPO's ~1.7 on
+# Moving is after 3M).
 WALL_CLOCK_SECONDS = 120  # about the time TD3 needs for the 50k-step budget, and 70x SarsaAAC's (TilePolicy)
 WALL_CLOCK_SEEDS = PAPER_SEEDS
 # The long budget of the dribbling envs, sized for the paper's episode counts: on the paper env (seed 0, 16 lanes)
@@ -445,6 +447,13 @@ FULL: dict[str, Any] = {
             **_EPISODIC_SIZES,
         ),
         "Moving-v0": _env(
+            100_000,
+            [*_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO", "PPO"), *_runs(FEW_SEEDS, "SarsaAAC-deep")],
+            _learners("SarsaAAC-tile"),
+            50_000,
+            **_EPISODIC_SIZES,
+        ),
+        "Sliding-v0": _env(
             100_000,
             [*_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO", "PPO"), *_runs(FEW_SEEDS, "SarsaAAC-deep")],
             _learners("SarsaAAC-tile"),

@@ -247,7 +247,7 @@ def test_presets_are_well_formed():
         ids = [c.cell_id for c in cells]
         assert len(ids) == len(set(ids))
     assert {c.env_id for c in quick} == {ENV_ID}
-    assert {c.env_id for c in full} == set(ENV_IDS) - {"Sliding-v0", "HalfFieldOffense-v0"}  # HFO: its own preset
+    assert {c.env_id for c in full} == set(ENV_IDS) - {"HalfFieldOffense-v0"}  # HFO: its own preset
     assert {c.algo for c in full} >= {*("SarsaAAC", "MPDQN", "HybridPPO", "PPO", "A2C", "TD3", "DQN", "Reference")}
     studies = {(s.env_id, s.algo, s.config) for s in plan_studies("full")}
     for env_id in {c.env_id for c in full}:
