@@ -26,7 +26,7 @@ from benchmarks import cells
 from benchmarks.figures import FAMILY_FIGURES, FAMILY_TITLES, best_figure, family_figure, final_figure, reliability_figure
 from benchmarks.groups import group_results
 from benchmarks.presets import PAPER_FAMILIES
-from benchmarks.report_budgets import budget_verdicts, split_views, tuned_section, wall_clock_section
+from benchmarks.report_budgets import budget_verdicts, policies_section, split_views, tuned_section, wall_clock_section
 from benchmarks.report_text import (
     cost_table,
     env_title,
@@ -103,6 +103,7 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
         "",
     ]
     lines += tuned_section(groups)
+    lines += policies_section(groups)
     lines += wall_clock_section(clock_groups)
     lines += setup_section(out, results, groups, reliability)
     lines += method_section(results)

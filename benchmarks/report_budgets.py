@@ -1,5 +1,6 @@
-"""The report's sections on budgets beyond the grid's env-step budget: each tuned learner against its defaults (with
-its tuning budget), the views at each env-step budget of an env, and the equal wall-clock budget.
+"""The report's sections on budgets and settings beyond the headline pairs: each tuned learner against its defaults
+(with its tuning budget), SarsaAAC's two candidate default policies against each other on every env, the views at each
+env-step budget of an env, and the equal wall-clock budget.
 
 Verdicts are Welch's tests on the difference (:func:`benchmarks.significance.compare`), with
 :data:`SHORT_VIEW_SEEDS` seeds a side at an env's main (shortest) budget and :data:`LONG_VIEW_SEEDS` at the long and
@@ -96,6 +97,47 @@ def tuned_section(groups: dict[str, list[Group]]) -> list[str]:
         "Final score IQM [95% CI] at the env-step budget:",
         "",
         md_table(["env", "learner", "env steps", "default", "tuned", "tuned - default", "tuning budget"], rows, "llrrrll"),
+        "",
+    ]
+
+
+POLICY_CANDIDATES = (("tile", "TilePolicy"), ("deep", "DeepPolicy"))  # SarsaAAC configs a user is pointed to first
+
+
+def policies_section(groups: dict[str, list[Group]]) -> list[str]:
+    """SarsaAAC's candidate policies (:data:`POLICY_CANDIDATES`) with their defaults at each env's main budget, the
+    second against the first (the evidence behind the recommended policy), and the tally of the verdicts."""
+    (first, first_name), (second, second_name) = POLICY_CANDIDATES
+    pair = (first, second)
+    rows, tally = [], {"A better": 0, "B better": 0, "no significant difference": 0, "too few seeds": 0}
+    for env_id, gs in groups.items():
+        budget = min(g.budget for g in gs)
+        a, b = (next((g for g in gs if (g.algo, g.config, g.budget) == ("SarsaAAC", c, budget)), None) for c in pair)
+        if a is None or b is None:
+            continue
+        unit, digits = _digits(env_id)
+        c = compare(b.final(), a.final(), min_seeds=SHORT_VIEW_SEEDS)
+        tally[c.outcome] += 1
+        rows.append(
+            [
+                env_id,
+                f"{budget:,}",
+                f"{fmt_ci(a.final(), digits)} ({len(a.runs)} seeds)",
+                f"{fmt_ci(b.final(), digits)} ({len(b.runs)} seeds)",
+                comparison_text(c, second_name, first_name, unit, digits),
+            ]
+        )
+    if not rows:
+        return []
+    return [
+        "## SarsaAAC's policies across the domains",
+        "",
+        f"{first_name} and {second_name} with their shipped defaults at each env's main budget, final score IQM [95% CI]; "
+        f"{second_name} against {first_name} by Welch's test ({SHORT_VIEW_SEEDS} seeds a side for a verdict). "
+        f"{second_name} better on {tally['A better']} env(s), {first_name} better on {tally['B better']}, no significant "
+        f"difference on {tally['no significant difference']}, no verdict on {tally['too few seeds']}.",
+        "",
+        md_table(["env", "env steps", first_name, second_name, f"{second_name} - {first_name}"], rows, "lrrrl"),
         "",
     ]
 

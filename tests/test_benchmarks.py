@@ -494,6 +494,16 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
     moving = text[text.index("- **Moving-v0**") :].split("\n- **")[0]
     assert "vs the best parameterized peer, HybridPPO" in moving and "**HybridPPO better**" in moving
     assert "against H-PPO's published 1.7" in moving
+    policies = text.split("## SarsaAAC's policies across the domains")[1].split("\n## ")[0]
+    assert "DeepPolicy better on 1 env(s), TilePolicy better on 1, no significant difference on 0" in policies
+    goal_row = next(line for line in policies.splitlines() if line.startswith("| Goal-v0 |"))
+    assert (
+        "**DeepPolicy better**" in goal_row
+        and "(10 seeds)" in goal_row
+        and "DeepPolicy - TilePolicy: means +0.150" in goal_row
+    )
+    moving_row = next(line for line in policies.splitlines() if line.startswith("| Moving-v0 |"))
+    assert "**TilePolicy better**" in moving_row
     for name in ("fig_best.png", "fig_final.png"):
         assert (tmp_path / name).stat().st_size > 10_000, name
 
