@@ -111,6 +111,8 @@ def policies_section(groups: dict[str, list[Group]]) -> list[str]:
     pair = (first, second)
     rows, tally = [], {"A better": 0, "B better": 0, "no significant difference": 0, "too few seeds": 0}
     for env_id, gs in groups.items():
+        if not gs:  # an env with only wall-clock cells, or none readable
+            continue
         budget = min(g.budget for g in gs)
         a, b = (next((g for g in gs if (g.algo, g.config, g.budget) == ("SarsaAAC", c, budget)), None) for c in pair)
         if a is None or b is None:

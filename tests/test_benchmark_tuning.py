@@ -66,10 +66,10 @@ def journal_trials(path: Path, study_name: str) -> list[optuna.trial.FrozenTrial
 
 def test_the_plan_gives_every_learner_a_study_of_the_same_size():
     studies = plan_studies("full")
-    # TilePolicy, MP-DQN and TD3 on the paper env; TilePolicy on Goal, CatchPoint and Moving
+    # TilePolicy, MP-DQN and TD3 on the paper env; TilePolicy on Goal, CatchPoint, Moving and Sliding
     assert [s.name for s in studies] == [
         *("paper__SarsaAAC-tile", "paper__MPDQN", "paper__TD3"),
-        *("goal__SarsaAAC-tile", "catchpoint__SarsaAAC-tile", "moving__SarsaAAC-tile"),
+        *("goal__SarsaAAC-tile", "catchpoint__SarsaAAC-tile", "moving__SarsaAAC-tile", "sliding__SarsaAAC-tile"),
     ]
     for env_id in {s.env_id for s in studies}:
         sizes = {(s.trials, s.env_steps, s.seeds, s.evaluations, s.eval_episodes) for s in studies if s.env_id == env_id}
