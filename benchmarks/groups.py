@@ -115,6 +115,11 @@ def scalar_ci(values: np.ndarray) -> tuple[float, float, float]:
     return float(point[0]), float(low[0]), float(high[0])
 
 
+def find_group(groups: list[Group], algo: str, config: str, budget: int) -> Group | None:
+    """The group of ``algo`` with ``config`` at env-step ``budget`` among ``groups``, or None."""
+    return next((g for g in groups if (g.algo, g.config, g.budget) == (algo, config, budget)), None)
+
+
 def best_group(groups: list[Group], algos: tuple[str, ...], family: str | None = None, min_seeds: int = 0) -> Group | None:
     """The group with the highest IQM final score among ``algos`` (and ``family``) with at least ``min_seeds`` runs."""
     pool = [g for g in groups if g.algo in algos and (family is None or g.family == family) and len(g.runs) >= min_seeds]

@@ -412,8 +412,7 @@ FULL: dict[str, Any] = {
         "RoboCupDribble-v0": _env(
             50_000,
             [
-                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "PPO", "TD3", "HybridPPO"),
-                *_runs(HEADLINE_SEEDS, "SarsaAAC-deep"),
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "PPO", "TD3", "HybridPPO"),
             ],
             [],
             20_000,
@@ -422,9 +421,8 @@ FULL: dict[str, Any] = {
         PLATFORM_ID: _env(
             20_000,
             [
-                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO", "PPO"),
-                *_runs(HEADLINE_SEEDS, "MPDQN"),  # the reference settings; published 0.987
-                *_runs(HEADLINE_SEEDS, "SarsaAAC-deep"),
+                # MP-DQN: the reference settings; published 0.987
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "MPDQN"),
             ],
             [],
             10_000,
@@ -433,9 +431,8 @@ FULL: dict[str, Any] = {
         "Goal-v0": _env(
             60_000,
             [
-                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO"),
-                *_runs(HEADLINE_SEEDS, "MPDQN"),  # the reference settings; published P(goal) 0.789
-                *_runs(HEADLINE_SEEDS, "SarsaAAC-deep"),
+                # MP-DQN: the reference settings; published P(goal) 0.789
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "MPDQN"),
             ],
             _learners("SarsaAAC-tile"),
             30_000,
@@ -443,21 +440,21 @@ FULL: dict[str, Any] = {
         ),
         "CatchPoint-v0": _env(
             50_000,
-            [*_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "TD3"), *_runs(HEADLINE_SEEDS, "SarsaAAC-deep")],
+            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "TD3"),
             _learners("SarsaAAC-tile"),
             25_000,
             **_EPISODIC_SIZES,
         ),
         "Moving-v0": _env(
             100_000,
-            [*_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO", "PPO"), *_runs(HEADLINE_SEEDS, "SarsaAAC-deep")],
+            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO"),
             _learners("SarsaAAC-tile"),
             50_000,
             **_EPISODIC_SIZES,
         ),
         "Sliding-v0": _env(
             100_000,
-            [*_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "HybridPPO", "PPO"), *_runs(HEADLINE_SEEDS, "SarsaAAC-deep")],
+            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO"),
             _learners("SarsaAAC-tile"),
             50_000,
             **_EPISODIC_SIZES,

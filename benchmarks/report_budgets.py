@@ -9,12 +9,13 @@ wall-clock budgets, whose runs cost up to 10x more.
 
 from __future__ import annotations
 
+from collections import Counter
 from typing import Any
 
 import numpy as np
 
 from benchmarks import domains
-from benchmarks.groups import KINDS, Group
+from benchmarks.groups import KINDS, Group, find_group
 from benchmarks.presets import base_config, is_tuned
 from benchmarks.report_text import comparison_text, fmt_ci, fmt_int, headline_pair, headline_verdicts, md_table
 from benchmarks.significance import MIN_SEEDS, compare
@@ -66,10 +67,7 @@ def tuned_section(groups: dict[str, list[Group]]) -> list[str]:
     for env_id, gs in groups.items():
         unit, digits = _digits(env_id)
         for tuned in (g for g in gs if is_tuned(g.config)):
-            default = next(
-                (g for g in gs if (g.algo, g.config, g.budget) == (tuned.algo, base_config(tuned.config), tuned.budget)),
-                None,
-            )
+            default = find_group(gs, tuned.algo, base_config(tuned.config), tuned.budget)
             if default is None:
                 verdict, default_text = "no default runs", "-"
             else:
@@ -108,13 +106,12 @@ def policies_section(groups: dict[str, list[Group]]) -> list[str]:
     """SarsaAAC's candidate policies (:data:`POLICY_CANDIDATES`) with their defaults at each env's main budget, the
     second against the first (the evidence behind the recommended policy), and the tally of the verdicts."""
     (first, first_name), (second, second_name) = POLICY_CANDIDATES
-    pair = (first, second)
-    rows, tally = [], {"A better": 0, "B better": 0, "no significant difference": 0, "too few seeds": 0}
+    rows, tally = [], Counter[str]()
     for env_id, gs in groups.items():
         if not gs:  # an env with only wall-clock cells, or none readable
             continue
         budget = min(g.budget for g in gs)
-        a, b = (next((g for g in gs if (g.algo, g.config, g.budget) == ("SarsaAAC", c, budget)), None) for c in pair)
+        a, b = find_group(gs, "SarsaAAC", first, budget), find_group(gs, "SarsaAAC", second, budget)
         if a is None or b is None:
             continue
         unit, digits = _digits(env_id)
