@@ -66,17 +66,18 @@ def journal_trials(path: Path, study_name: str) -> list[optuna.trial.FrozenTrial
 
 def test_the_plan_gives_every_learner_a_study_of_the_same_size():
     studies = plan_studies("full")
-    # TilePolicy, MP-DQN and TD3 on the paper env; TilePolicy on Goal, CatchPoint, Moving and Sliding
+    # SarsaAAC's TilePolicy and DeepPolicy on every env, and MP-DQN and TD3 on the paper env
+    sarsa = ("SarsaAAC-tile", "SarsaAAC-deep")
     assert [s.name for s in studies] == [
-        *("paper__SarsaAAC-tile", "paper__MPDQN", "paper__TD3"),
-        *("goal__SarsaAAC-tile", "catchpoint__SarsaAAC-tile", "moving__SarsaAAC-tile", "sliding__SarsaAAC-tile"),
+        *("paper__SarsaAAC-tile", "paper__SarsaAAC-deep", "paper__MPDQN", "paper__TD3"),
+        *(f"{env}__{learner}" for env in ("v19", "platform", "goal", "catchpoint", "moving", "sliding") for learner in sarsa),
     ]
     for env_id in {s.env_id for s in studies}:
         sizes = {(s.trials, s.env_steps, s.seeds, s.evaluations, s.eval_episodes) for s in studies if s.env_id == env_id}
         assert len(sizes) == 1 and next(iter(sizes))[0] >= 20
     # a trial trains on the env's tune_steps
     assert {s.name: s.env_steps for s in plan_studies("full", 3, "paper__*")} == dict.fromkeys(
-        ("paper__SarsaAAC-tile", "paper__MPDQN", "paper__TD3"), 20_000
+        ("paper__SarsaAAC-tile", "paper__SarsaAAC-deep", "paper__MPDQN", "paper__TD3"), 20_000
     )
     assert TUNE_SEED > 9 and TUNE_EVAL_SEED not in (10_000, 20_000, 30_000)  # none of the grid's seeds or sets
 

@@ -129,9 +129,15 @@ SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
     ("sarsa_aac", "TilePolicy"): SearchSpace(
         _SARSA_AAC, {"tiles_per_input": IntDistribution(4, 16), "n_tilings": IntDistribution(4, 16)}
     ),
-    # DeepPolicy learns best with traces (docs/sarsa_aac_results.md: trace_lambda=0.8); ObGD's kappa around the paper's 2.
+    # DeepPolicy learns best with traces (docs/sarsa_aac_results.md: trace_lambda=0.8), on CatchPoint with replay and
+    # is there the one family the parameter critic helps (ibid.); ObGD's kappa around the paper's 2.
     ("sarsa_aac", "DeepPolicy"): SearchSpace(
-        {**_SARSA_AAC, "trace_lambda": FloatDistribution(0.0, 0.95)}, {"kappa": FloatDistribution(1.0, 4.0)}
+        {
+            **_SARSA_AAC_REPLAY,
+            "trace_lambda": FloatDistribution(0.0, 0.95),
+            "parameter_update": CategoricalDistribution(("cacla", "critic")),
+        },
+        {"kappa": FloatDistribution(1.0, 4.0)},
     ),
     ("hppo", "MlpPolicy"): SearchSpace(_HPPO, {"log_std_init": FloatDistribution(-2.0, 0.5)}),
 }
