@@ -474,8 +474,8 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
         "final P(goal), IQM [95% CI]",
         "final mean return, IQM [95% CI]",
         "DeepPolicy",
-        "*MP-DQN, published* | - | - | - | 0.789",
-        "*H-PPO, published* | - | - | - | 1.700",
+        "*MP-DQN (mean over seeds), published* | - | - | - | 0.789",
+        "*H-PPO (mean of 5 seeds, read off a plot), published* | - | - | - | 1.700",
         "episodes to 0.7",
         "episodes to 1.5",
         "HybridPPO (Moving-v0): hyperparams/hppo.yml (Platform-v0; no entry for Moving-v0)",
@@ -490,10 +490,10 @@ def test_report_covers_the_new_learners_and_domains(tmp_path):
     goal = text[text.index("- **Goal-v0**") :].split("\n- **")[0]
     assert "best SarsaAAC config, DeepPolicy" in goal
     assert "vs the best parameterized peer, MPDQN" in goal and "**SarsaAAC deep better**" in goal
-    assert "against MP-DQN's published 0.789" in goal
+    assert "against MP-DQN (mean over seeds)'s published 0.789" in goal
     moving = text[text.index("- **Moving-v0**") :].split("\n- **")[0]
     assert "vs the best parameterized peer, HybridPPO" in moving and "**HybridPPO better**" in moving
-    assert "against H-PPO's published 1.7" in moving
+    assert "against H-PPO (mean of 5 seeds, read off a plot)'s published 1.7" in moving
     policies = text.split("## SarsaAAC's policies across the domains")[1].split("\n## ")[0]
     assert "DeepPolicy better on 1 env(s), TilePolicy better on 1, no significant difference on 0" in policies
     goal_row = next(line for line in policies.splitlines() if line.startswith("| Goal-v0 |"))
