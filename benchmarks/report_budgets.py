@@ -18,7 +18,7 @@ from benchmarks import domains
 from benchmarks.groups import KINDS, Group, find_group
 from benchmarks.presets import base_config, is_tuned
 from benchmarks.report_text import comparison_text, fmt_ci, fmt_int, headline_pair, headline_verdicts, md_table
-from benchmarks.significance import MIN_SEEDS, compare
+from benchmarks.significance import MIN_SEEDS, compare, iqm
 
 SHORT_VIEW_SEEDS = MIN_SEEDS
 LONG_VIEW_SEEDS = 5
@@ -102,32 +102,64 @@ def tuned_section(groups: dict[str, list[Group]]) -> list[str]:
 POLICY_CANDIDATES = (("tile", "TilePolicy"), ("deep", "DeepPolicy"))  # SarsaAAC configs a user is pointed to first
 
 
-def policies_section(groups: dict[str, list[Group]]) -> list[str]:
-    """SarsaAAC's candidate policies (:data:`POLICY_CANDIDATES`) with their defaults at each env's main budget, the
-    second against the first (the evidence behind the recommended policy), and the tally of the verdicts."""
-    (first, first_name), (second, second_name) = POLICY_CANDIDATES
-    rows, tally = [], Counter[str]()
+def relative_score(group: Group, rivals: list[Group]) -> float:
+    """``group``'s final IQM placed between the worst (0) and the best (1) final IQM of ``rivals`` (every learner of
+    the env at the same budget, ``group`` among them); 1 where all score the same."""
+    scores = [float(iqm(g.final())) for g in rivals]
+    best, worst = max(scores), min(scores)
+    return 1.0 if best == worst else (float(iqm(group.final())) - worst) / (best - worst)
+
+
+def candidate_groups(groups: dict[str, list[Group]]) -> dict[str, tuple[int, list[Group], Group, Group]]:
+    """Per env where both :data:`POLICY_CANDIDATES` ran with their defaults at its main (shortest) budget: that
+    budget, every group at it, and the two candidates' groups."""
+    (first, _), (second, _) = POLICY_CANDIDATES
+    found = {}
     for env_id, gs in groups.items():
         if not gs:  # an env with only wall-clock cells, or none readable
             continue
         budget = min(g.budget for g in gs)
         a, b = find_group(gs, "SarsaAAC", first, budget), find_group(gs, "SarsaAAC", second, budget)
-        if a is None or b is None:
-            continue
+        if a is not None and b is not None:
+            found[env_id] = (budget, [g for g in gs if g.budget == budget], a, b)
+    return found
+
+
+def recommended_policy(groups: dict[str, list[Group]]) -> str | None:
+    """The candidate policy with the higher mean :func:`relative_score` over the envs where both ran (the first
+    candidate on a tie); None where there is no such env. The rule behind the "(recommended)" label."""
+    found = candidate_groups(groups)
+    if not found:
+        return None
+    means = [np.mean([relative_score(pair[k], rivals) for _, rivals, *pair in found.values()]) for k in (0, 1)]
+    return POLICY_CANDIDATES[int(means[1] > means[0])][1]
+
+
+def policies_section(groups: dict[str, list[Group]]) -> list[str]:
+    """SarsaAAC's candidate policies (:data:`POLICY_CANDIDATES`) with their defaults at each env's main budget, the
+    second against the first by Welch's test, and each one's score relative to the env's best learner, whose mean
+    over the envs picks the recommended policy (:func:`recommended_policy`)."""
+    (_, first_name), (_, second_name) = POLICY_CANDIDATES
+    rows, tally, relative = [], Counter[str](), ([], [])
+    for env_id, (budget, rivals, a, b) in candidate_groups(groups).items():
         unit, digits = _digits(env_id)
         c = compare(b.final(), a.final(), min_seeds=SHORT_VIEW_SEEDS)
         tally[c.outcome] += 1
+        for scores, group in zip(relative, (a, b), strict=True):
+            scores.append(relative_score(group, rivals))
         rows.append(
             [
                 env_id,
                 f"{budget:,}",
                 f"{fmt_ci(a.final(), digits)} ({len(a.runs)} seeds)",
                 f"{fmt_ci(b.final(), digits)} ({len(b.runs)} seeds)",
+                f"{relative[0][-1]:.2f} / {relative[1][-1]:.2f}",
                 comparison_text(c, second_name, first_name, unit, digits),
             ]
         )
     if not rows:
         return []
+    means = [float(np.mean(scores)) for scores in relative]
     return [
         "## SarsaAAC's policies across the domains",
         "",
@@ -136,7 +168,16 @@ def policies_section(groups: dict[str, list[Group]]) -> list[str]:
         f"{second_name} better on {tally['A better']} env(s), {first_name} better on {tally['B better']}, no significant "
         f"difference on {tally['no significant difference']}, no verdict on {tally['too few seeds']}.",
         "",
-        md_table(["env", "env steps", first_name, second_name, f"{second_name} - {first_name}"], rows, "lrrrl"),
+        "Relative score: the policy's final IQM placed between the worst (0) and the best (1) final IQM of every learner "
+        "of the env at that budget (tuned twins included). Mean over the envs: "
+        f"{first_name} {means[0]:.2f}, {second_name} {means[1]:.2f}; the recommended policy, the one with the higher "
+        f"mean, is **{recommended_policy(groups)}**.",
+        "",
+        md_table(
+            ["env", "env steps", first_name, second_name, "relative score", f"{second_name} - {first_name}"],
+            rows,
+            "lrrrrl",
+        ),
         "",
     ]
 

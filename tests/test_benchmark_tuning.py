@@ -398,7 +398,7 @@ def test_the_report_shows_tuned_rows_and_the_wall_clock_view(tmp_path):
     assert "MPDQN, tuned" in text  # its own row in the env's tables
 
     clock_section = text.split("## Equal wall-clock budget")[1].split("\n## ")[0]
-    assert "| TilePolicy (recommended) | 5 | 120 |" in clock_section and "5/5" in clock_section
+    assert "| TilePolicy | 5 | 120 |" in clock_section and "5/5" in clock_section
     assert "at 120 s: **SarsaAAC better**" in clock_section
 
     summary = text.split("## Summary")[1].split("\n## ")[0]

@@ -51,7 +51,7 @@ def test_train_episodes_tensorboard_other_env(tmp_path: Path, capsys) -> None:
     )
     out = capsys.readouterr().out
     assert "30 episodes" in out and "mean distance" in out and "share >= 20 m" in out and "ball-loss rate" in out
-    assert list((tmp_path / "tb").glob("SarsaAAC_TilePolicy_1/events.out.tfevents.*"))
+    assert list((tmp_path / "tb").glob("SarsaAAC_DeepPolicy_1/events.out.tfevents.*"))
     assert main(["train", "--env", "sb3_aac/ParameterizedTarget-v0", "--policy", "MlpPolicy", "--timesteps", "200",
                  "--n-envs", "2", "--eval-episodes", "3", "--progress-bar"]) == 0  # fmt: skip
     assert "greedy evaluation over 3 episodes: return" in capsys.readouterr().out

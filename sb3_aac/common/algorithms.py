@@ -34,7 +34,7 @@ class Algorithm(NamedTuple):
 
 PDQN_POLICY_KEYS = ("net_arch", "actor_net_arch", "param_bounding", "initial_params")
 ALGOS = {
-    "sarsa_aac": Algorithm("SarsaAAC", "TilePolicy", POLICY_KEYS),  # the recommended policy (docs/sarsa_aac.md)
+    "sarsa_aac": Algorithm("SarsaAAC", "DeepPolicy", POLICY_KEYS),  # the recommended policy (docs/sarsa_aac.md)
     "pdqn": Algorithm("PDQN", "MlpPolicy", PDQN_POLICY_KEYS),
     "mpdqn": Algorithm("MPDQN", "MlpPolicy", PDQN_POLICY_KEYS),
     "hppo": Algorithm("HybridPPO", "MlpPolicy", ("net_arch", "ortho_init", "log_std_init")),

@@ -104,8 +104,8 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
     The paper gives no numbers for any hyperparameter; every default below was chosen by us, on the measurements in
     ``docs/sarsa_aac_results.md`` ("How the defaults were chosen").
 
-    :param policy: The policy model to use (TilePolicy, recommended; MlpPolicy, RbfMlpPolicy, RbfPolicy; or a
-        SarsaAACPolicy subclass)
+    :param policy: The policy model to use (DeepPolicy, recommended; TilePolicy, the fastest per env step; MlpPolicy,
+        RbfMlpPolicy, RbfPolicy; or a SarsaAACPolicy subclass)
     :param env: The environment to learn from (if registered in Gym, can be str)
     :param learning_rate: Critic learning rate (normalised, in ``[0, 1]``), or a schedule of the progress
         remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``; None (the default) takes the policy's
