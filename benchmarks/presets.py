@@ -318,7 +318,7 @@ HEADLINE_SEEDS = tuple(range(10))  # a headline pair's learners: >= 10 seeds (be
 PAPER_SEEDS = tuple(range(5))  # the paper's configs, the long and the wall-clock budgets, and costly default rows
 FEW_SEEDS = tuple(range(3))  # every other learner
 
-# full: the regeneration, sized to about 5 core-hours on the development machine (4.2 measured on 2026-12-02;
+# full: the regeneration, sized to about 9 core-hours on the development machine (8.8 measured by 2026-12-06;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 250-600 env steps/s on
 # one core (MP-DQN 4 ms a step, TD3 1.8), many times slower than SarsaAAC (the report's "Training cost" line), so 10
@@ -330,7 +330,7 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 # * ``tuned``: the learners with a tuning study (benchmarks.tuning: FULL_TUNING's size, ``tune_steps`` env steps a
 #   trial) and a tuned twin with HEADLINE_SEEDS. The study goes where a learner runs settings nobody chose for the
 #   env: every headline learner of the paper env (where MP-DQN's untuned 3.6 m decided the earlier verdicts) and
-#   SarsaAAC's TilePolicy on the hybrid domains (its defaults were chosen on our tasks, Platform among them). MP-DQN
+#   SarsaAAC's TilePolicy and DeepPolicy on every env (their defaults were chosen on a few of our tasks). MP-DQN
 #   on Platform and Goal runs the reference MP-DQN code's published settings (hyperparams/mpdqn.yml), which its
 #   authors chose for those domains; TD3, PPO and HybridPPO elsewhere run their documented defaults, untuned.
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
