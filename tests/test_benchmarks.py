@@ -675,3 +675,21 @@ def test_the_report_shows_commands_without_their_out_directory():
         portable_command("python -m benchmarks.run --out=/tmp/y --only 'a,b'")
         == "python -m benchmarks.run --out=DIR --only a,b"
     )
+
+
+def test_the_speed_comparison_with_an_earlier_commit_runs_both_trees_and_cleans_up(capsys):
+    """``benchmarks.speed.versus`` against HEAD itself (the machinery, not a figure): one pair of HybridPPO runs, the
+    ratio line, and no worktree left behind; a name that is no commit is refused before anything runs."""
+    import subprocess
+
+    from benchmarks.speed import versus
+
+    root = Path(__file__).resolve().parents[1]
+    before = subprocess.run(["git", "worktree", "list"], cwd=root, capture_output=True, text=True).stdout
+    assert versus.main(["HEAD", "--algos", "HybridPPO", "--repeats", "1", "--scale", "0.1"]) == 0
+    out = capsys.readouterr().out
+    assert "HybridPPO this checkout" in out and "x the earlier commit's env steps/s (median of 1 pairs)" in out
+    assert subprocess.run(["git", "worktree", "list"], cwd=root, capture_output=True, text=True).stdout == before
+    with pytest.raises(SystemExit):
+        versus.main(["no-such-revision-xyz"])
+    assert "names no commit" in capsys.readouterr().err
