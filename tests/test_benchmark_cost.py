@@ -92,7 +92,8 @@ def test_the_estimate_prints_the_wall_time_on_each_count_of_cores(capsys):
     minutes = {int(line.split()[0]): float(line.split()[-1]) for line in table}
     assert set(minutes) == {1, 8, 64}
     assert minutes[1] == pytest.approx(60 * core_hours, abs=0.6)  # one core runs everything one after the other
-    assert minutes[1] / 8 <= minutes[8] < minutes[1] / 8 + minutes[64]  # the pool's bound: sum / N + the longest
+    # the pool's bound: sum / N + the longest (minutes printed to 0.1, so each side may be 0.05 off)
+    assert minutes[1] / 8 - 0.05 <= minutes[8] < minutes[1] / 8 + minutes[64]
     longest = max(cost.cell_seconds(c) for c in build_cells("full")) / 60
     longest_trial = max(cost.trial_seconds(s) for s in plan_studies("full")) / 60
     assert minutes[64] >= longest + longest_trial - 0.05  # no core count beats the longest cell and trial (printed to 0.1)
