@@ -125,14 +125,22 @@ def candidate_groups(groups: dict[str, list[Group]]) -> dict[str, tuple[int, lis
     return found
 
 
+def relative_scores(found: dict[str, tuple[int, list[Group], Group, Group]]) -> dict[str, tuple[float, float]]:
+    """Per env of :func:`candidate_groups`, the two candidates' :func:`relative_score` among that env's learners."""
+    return {env_id: (relative_score(a, rivals), relative_score(b, rivals)) for env_id, (_, rivals, a, b) in found.items()}
+
+
+def pick(scores: dict[str, tuple[float, float]]) -> str:
+    """The candidate with the higher mean relative score over the envs (the first candidate on a tie)."""
+    means = np.mean(list(scores.values()), axis=0)
+    return POLICY_CANDIDATES[int(means[1] > means[0])][1]
+
+
 def recommended_policy(groups: dict[str, list[Group]]) -> str | None:
     """The candidate policy with the higher mean :func:`relative_score` over the envs where both ran (the first
     candidate on a tie); None where there is no such env. The rule behind the "(recommended)" label."""
     found = candidate_groups(groups)
-    if not found:
-        return None
-    means = [np.mean([relative_score(pair[k], rivals) for _, rivals, *pair in found.values()]) for k in (0, 1)]
-    return POLICY_CANDIDATES[int(means[1] > means[0])][1]
+    return pick(relative_scores(found)) if found else None
 
 
 def policies_section(groups: dict[str, list[Group]]) -> list[str]:
@@ -140,26 +148,26 @@ def policies_section(groups: dict[str, list[Group]]) -> list[str]:
     second against the first by Welch's test, and each one's score relative to the env's best learner, whose mean
     over the envs picks the recommended policy (:func:`recommended_policy`)."""
     (_, first_name), (_, second_name) = POLICY_CANDIDATES
-    rows, tally, relative = [], Counter[str](), ([], [])
-    for env_id, (budget, rivals, a, b) in candidate_groups(groups).items():
+    found = candidate_groups(groups)
+    if not found:
+        return []
+    scores = relative_scores(found)
+    rows, tally = [], Counter[str]()
+    for env_id, (budget, _, a, b) in found.items():
         unit, digits = _digits(env_id)
         c = compare(b.final(), a.final(), min_seeds=SHORT_VIEW_SEEDS)
         tally[c.outcome] += 1
-        for scores, group in zip(relative, (a, b), strict=True):
-            scores.append(relative_score(group, rivals))
         rows.append(
             [
                 env_id,
                 f"{budget:,}",
                 f"{fmt_ci(a.final(), digits)} ({len(a.runs)} seeds)",
                 f"{fmt_ci(b.final(), digits)} ({len(b.runs)} seeds)",
-                f"{relative[0][-1]:.2f} / {relative[1][-1]:.2f}",
+                f"{scores[env_id][0]:.2f} / {scores[env_id][1]:.2f}",
                 comparison_text(c, second_name, first_name, unit, digits),
             ]
         )
-    if not rows:
-        return []
-    means = [float(np.mean(scores)) for scores in relative]
+    means = np.mean(list(scores.values()), axis=0)
     return [
         "## SarsaAAC's policies across the domains",
         "",
@@ -171,7 +179,7 @@ def policies_section(groups: dict[str, list[Group]]) -> list[str]:
         "Relative score: the policy's final IQM placed between the worst (0) and the best (1) final IQM of every learner "
         "of the env at that budget (tuned twins included). Mean over the envs: "
         f"{first_name} {means[0]:.2f}, {second_name} {means[1]:.2f}; the recommended policy, the one with the higher "
-        f"mean, is **{recommended_policy(groups)}**.",
+        f"mean, is **{pick(scores)}**.",
         "",
         md_table(
             ["env", "env steps", first_name, second_name, "relative score", f"{second_name} - {first_name}"],

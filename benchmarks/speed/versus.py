@@ -17,6 +17,7 @@ one) per learner, with the load average.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import subprocess
@@ -25,27 +26,29 @@ import tempfile
 from pathlib import Path
 
 from benchmarks.speed.timing import load_average
+from benchmarks.speed.training import HPPO_ROLLOUT, PDQN_SETTINGS
 
 ALGOS = ("PDQN", "MPDQN", "HybridPPO")
-STEPS = {"PDQN": 3000, "MPDQN": 3000, "HybridPPO": 4096}  # HybridPPO: 16 rollouts of 256
+STEPS = {"PDQN": 3000, "MPDQN": 3000, "HybridPPO": 16 * HPPO_ROLLOUT["n_steps"]}  # timed env steps
+WARMUP = {"PDQN": 500, "MPDQN": 500, "HybridPPO": 2 * HPPO_ROLLOUT["n_steps"]}  # untimed env steps first
+# The constructor settings of benchmarks.speed.training (P-DQN's nets of 64x64 as its pdqn_model gives them).
+SETTINGS: dict[str, dict[str, object]] = {
+    "PDQN": {**PDQN_SETTINGS, "policy_kwargs": {"net_arch": [64, 64]}},
+    "MPDQN": {**PDQN_SETTINGS, "policy_kwargs": {"net_arch": [64, 64]}},
+    "HybridPPO": {**HPPO_ROLLOUT, "seed": 0, "device": "cpu"},
+}
 
-# Run with ``python -c`` in either tree: only the API that both trees have.
+# Run with ``python -c`` in either tree: only the API that both trees have; the settings come as JSON.
 MEASURE = """
-import sys, time
+import json, sys, time
 import torch as th
 th.set_num_threads(1)
 import robocup_dribble  # noqa: F401  (registers the env ids)
 from stable_baselines3.common.env_util import make_vec_env
-from sb3_aac import MPDQN, PDQN, HybridPPO
-algo, steps = sys.argv[1], int(sys.argv[2])
+import sb3_aac
+algo, steps, warmup, settings = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), json.loads(sys.argv[4])
 env = make_vec_env("RoboCupDribblePaper-v0", n_envs=1, seed=0)
-if algo == "HybridPPO":
-    model, warmup = HybridPPO("MlpPolicy", env, n_steps=256, batch_size=256, seed=0, device="cpu"), 512
-else:
-    cls = PDQN if algo == "PDQN" else MPDQN
-    model = cls("MlpPolicy", env, policy_kwargs=dict(net_arch=[64, 64]), learning_starts=100, batch_size=128,
-                train_freq=1, gradient_steps=1, seed=0, device="cpu")
-    warmup = 500
+model = getattr(sb3_aac, algo)("MlpPolicy", env, **settings)
 model.learn(warmup)
 start = time.perf_counter()
 model.learn(steps, reset_num_timesteps=False)
@@ -56,9 +59,8 @@ print(steps / (time.perf_counter() - start))
 def launch(tree: Path, algo: str, steps: int) -> subprocess.Popen[str]:
     """One measuring process on ``tree``'s packages (its root and its ``envs`` first on the path)."""
     env = {**os.environ, "PYTHONPATH": f"{tree}{os.pathsep}{tree / 'envs'}", "OMP_NUM_THREADS": "1"}
-    return subprocess.Popen(
-        [sys.executable, "-c", MEASURE, algo, str(steps)], cwd=tree, env=env, stdout=subprocess.PIPE, text=True
-    )
+    argv = [algo, str(steps), str(WARMUP[algo]), json.dumps(SETTINGS[algo])]
+    return subprocess.Popen([sys.executable, "-c", MEASURE, *argv], cwd=tree, env=env, stdout=subprocess.PIPE, text=True)
 
 
 def rate(process: subprocess.Popen[str], tree: Path) -> float:

@@ -129,8 +129,8 @@ SEARCH_SPACES: dict[tuple[str, str], SearchSpace] = {
     ("sarsa_aac", "TilePolicy"): SearchSpace(
         _SARSA_AAC, {"tiles_per_input": IntDistribution(4, 16), "n_tilings": IntDistribution(4, 16)}
     ),
-    # DeepPolicy learns best with traces (docs/sarsa_aac_results.md: trace_lambda=0.8), on CatchPoint with replay and
-    # is there the one family the parameter critic helps (ibid.); ObGD's kappa around the paper's 2.
+    # DeepPolicy learns best with traces (docs/sarsa_aac_results.md: trace_lambda=0.8), on CatchPoint with replay
+    # (ibid.; the parameter critic did worse there, and is searched, not assumed); ObGD's kappa around the paper's 2.
     ("sarsa_aac", "DeepPolicy"): SearchSpace(
         {
             **_SARSA_AAC_REPLAY,
