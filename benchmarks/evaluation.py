@@ -6,10 +6,10 @@ The equal wall-clock budget: a cell with ``seconds > 0`` trains until that many 
 (its greedy evaluations excluded, so every learner gets the same training time whatever its evaluation costs), or
 until its env-step horizon, whichever comes first; :class:`TrainingTimeLimit` ends ``learn`` at the limit.
 
-The horizon (``Cell.budget``) is what the learner steps in those seconds at its usual rate
-(:data:`benchmarks.presets.STEPS_PER_SECOND`), because schedules (exploration, learning rates) run over the
-horizon: a learner trained for 120 s ends its schedules at about 120 s. The cell file records which limit ended
-training (``stopped_by``).
+The horizon (``Cell.budget``) is :data:`benchmarks.presets.WALL_CLOCK_HEADROOM` (2) times what the learner steps in
+those seconds at its usual rate (:data:`benchmarks.presets.STEPS_PER_SECOND`), so that the clock ends training even
+where the learner runs faster than usual; schedules (exploration, learning rates) run over the horizon, so at the
+stop they are at least half done. The cell file records which limit ended training (``stopped_by``).
 """
 
 from __future__ import annotations

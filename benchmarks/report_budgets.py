@@ -198,9 +198,10 @@ def wall_clock_section(groups: dict[str, list[Group]]) -> list[str]:
     lines = [
         "## Equal wall-clock budget",
         "",
-        "Every learner trains for the same seconds on one core (evaluations excluded), or until its env-step horizon "
-        "(the steps its algorithm usually makes in that time, over which its schedules run); the final evaluation is "
-        "the same as at the env-step budget.",
+        "Every learner trains for the same seconds on one core (evaluations excluded); its env-step horizon, over "
+        "which its schedules run, is twice what its algorithm usually steps in that time, so the clock ends training "
+        "(the column 'stopped by time' counts the runs it ended). The final evaluation is the same as at the env-step "
+        "budget.",
         "",
     ]
     for env_id, gs in groups.items():

@@ -693,3 +693,18 @@ def test_the_speed_comparison_with_an_earlier_commit_runs_both_trees_and_cleans_
     with pytest.raises(SystemExit):
         versus.main(["no-such-revision-xyz"])
     assert "names no commit" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("preset, results", [("full", "results"), ("hfo", "results/hfo")])
+def test_wall_clock_horizons_leave_the_clock_to_end_training(preset, results):
+    """Each wall-clock cell's env-step horizon exceeds what its learner stepped per second of training in the committed
+    runs of that cell (any seed) times its seconds, so the clock, not the horizon, ends the next run at those rates."""
+    from benchmarks.presets import PRESETS
+
+    committed = Path(__file__).resolve().parents[1] / "benchmarks" / results / "cells"
+    cells = [c for c in build_cells(PRESETS[preset]) if c.seconds]
+    assert cells
+    for cell in cells:
+        runs = [json.loads(p.read_text()) for p in committed.glob(f"{cell.cell_id.rsplit('__s', 1)[0]}__s*__{cell.seconds}s.json")]
+        fastest = max((r["env_steps"] / r["train_wall_s"] for r in runs), default=0.0)
+        assert cell.budget > fastest * cell.seconds, (cell.cell_id, cell.budget, fastest)
