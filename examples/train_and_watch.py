@@ -1,7 +1,7 @@
 """
 Train SarsaAAC to dribble, measure it on fresh players, and save a GIF of one episode.
 
-    python examples/train_and_watch.py            # about 100,000 steps: a minute
+    python examples/train_and_watch.py            # 100,000 env steps: seconds of training
     python examples/train_and_watch.py --quick    # a few seconds, to check the pipeline
 
 Needs pygame and imageio (``pip install "sb3-aac[dev]"``). The same as
@@ -28,7 +28,7 @@ def main() -> None:
 
     env = DribbleVecEnv(16, profile="v11")  # the paper's server; 16 lanes stepped together
     env.seed(0)
-    model = SarsaAAC("RbfPolicy", env, seed=0).learn(steps)
+    model = SarsaAAC("DeepPolicy", env, seed=0).learn(steps)  # what ``sb3-aac train`` trains by default
 
     report = evaluate_dribbling(model, episodes, profile="v11", seed=1)
     print("greedy, fresh players:", report.summary())

@@ -34,7 +34,7 @@ __all__ = ["CliError", "build_parser", "main"]
 EPILOG = """\
 examples:
   sb3-aac train --env RoboCupDribblePaper-v0 --policy RbfPolicy --episodes 3000 --n-envs 16 --seed 0 --out runs/rbf
-  sb3-aac train --timesteps 200000 --set gamma=0.95 --tensorboard runs/tb --progress-bar   # TilePolicy, the default
+  sb3-aac train --timesteps 200000 --set gamma=0.95 --tensorboard runs/tb --progress-bar   # DeepPolicy, the default
   sb3-aac train --algo mpdqn --env RoboCupDribblePaper-v0 --timesteps 200000 --out runs/mpdqn
   sb3-aac evaluate runs/rbf/model.zip --episodes 1000
   sb3-aac evaluate dribbler --profile v11           # the hand-coded dribbler, for comparison

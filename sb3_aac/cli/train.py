@@ -53,7 +53,9 @@ def add_train_command(add: Any) -> None:
         help="algorithm, by key or class name (HybridPPO = hppo; default: %(default)s)",
     )
     train.add_argument(
-        "--policy", choices=POLICIES, help="function approximators (default: TilePolicy; MlpPolicy for pdqn/mpdqn/hppo)"
+        "--policy",
+        choices=POLICIES,
+        help=f"function approximators (default: {ALGOS['sarsa_aac'].default_policy}; MlpPolicy for pdqn/mpdqn/hppo)",
     )
     budget = train.add_mutually_exclusive_group()
     budget.add_argument(
