@@ -705,6 +705,8 @@ def test_wall_clock_horizons_leave_the_clock_to_end_training(preset, results):
     cells = [c for c in build_cells(PRESETS[preset]) if c.seconds]
     assert cells
     for cell in cells:
-        runs = [json.loads(p.read_text()) for p in committed.glob(f"{cell.cell_id.rsplit('__s', 1)[0]}__s*__{cell.seconds}s.json")]
-        fastest = max((r["env_steps"] / r["train_wall_s"] for r in runs), default=0.0)
+        learner = cell.cell_id.rsplit("__s", 1)[0]
+        runs = [json.loads(p.read_text()) for p in committed.glob(f"{learner}__s*__{cell.seconds}s.json")]
+        assert runs, cell.cell_id
+        fastest = max(r["env_steps"] / r["train_wall_s"] for r in runs)
         assert cell.budget > fastest * cell.seconds, (cell.cell_id, cell.budget, fastest)
