@@ -701,12 +701,14 @@ def test_wall_clock_horizons_leave_the_clock_to_end_training(preset, results):
     runs of that cell (any seed) times its seconds, so the clock, not the horizon, ends the next run at those rates."""
     from benchmarks.presets import PRESETS
 
-    committed = Path(__file__).resolve().parents[1] / "benchmarks" / results / "cells"
+    def learner(cell: Cell) -> tuple[str, str, str, int]:
+        return cell.env_id, cell.algo, cell.config, cell.seconds
+
+    committed = cell_files.load_cells(Path(__file__).resolve().parents[1] / "benchmarks" / results)
     cells = [c for c in build_cells(PRESETS[preset]) if c.seconds]
     assert cells
     for cell in cells:
-        learner = cell.cell_id.rsplit("__s", 1)[0]
-        runs = [json.loads(p.read_text()) for p in committed.glob(f"{learner}__s*__{cell.seconds}s.json")]
+        runs = [r for r in committed if learner(Cell.from_dict(r["cell"])) == learner(cell)]
         assert runs, cell.cell_id
         fastest = max(r["env_steps"] / r["train_wall_s"] for r in runs)
         assert cell.budget > fastest * cell.seconds, (cell.cell_id, cell.budget, fastest)
