@@ -7,6 +7,7 @@ Usage::
     python -m benchmarks.run --preset full --estimate [--only ...] [--cores N[,N...]]  # core-hours, run nothing
     python -m benchmarks.run --reliability [--out DIR]      # the reliability test of the best policies
     python -m benchmarks.run --tune --preset P [--trials N] [--storage JOURNAL_OR_URL] [--only ...] [--engine ...]
+    python -m benchmarks.run --preset full --only 'goal__SarsaAAC-deep__s[0-4]__*' --set replay_ratio=3 --out DIR
     python -m benchmarks.report DIR                         # report.md and figures from the cell files
 
 Each cell (env id x algorithm x config x seed x budget, see :mod:`benchmarks.presets`) trains through SB3's
@@ -34,6 +35,11 @@ own results folder; ``python -m benchmarks.merge`` puts the folders together for
 budgets, the long budgets, the equal wall-clock budget, the tuning stage) and env, in core-hours
 (:mod:`benchmarks.cost`), and with ``--cores`` its wall time on that many cores; it runs nothing.
 
+``--set KEY=VALUE`` (repeatable; the value a Python literal) runs the selected cells with that SarsaAAC keyword
+argument (a policy argument goes into ``policy_kwargs``), e.g. to try a candidate default on the grid's seeds and
+budgets; it takes untuned SarsaAAC cells only and belongs in a folder of its own (each cell records its overrides,
+and the committed results' test refuses cells that are not the preset's).
+
 ``--tune`` runs the tuning stage instead of the grid (:mod:`benchmarks.tuning`): one Optuna study per tuned learner
 and env of the preset, their best settings written to ``hyperparams/tuned/<env id>/<learner>.yml`` (``--tuned-dir``
 another folder), which the grid's ``<config>-tuned`` cells read.
@@ -48,6 +54,7 @@ import shlex
 import signal
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -55,7 +62,7 @@ from benchmarks import cells
 from benchmarks.cost import estimate_text, wall_text
 from benchmarks.execution import run_grid
 from benchmarks.engines import RayEngine
-from benchmarks.presets import PRESETS, Cell, build_cells, select
+from benchmarks.presets import PRESETS, Cell, build_cells, is_tuned, select
 from benchmarks.provenance import (
     ENV_VAR,
     REPO,
@@ -70,6 +77,7 @@ from benchmarks.reliability import RELIABILITY_PLAYERS, run_reliability
 from benchmarks.shards import Shard
 from benchmarks.tuned import TUNED_DIR_VAR, resolve_tuned, tuned_dir
 from benchmarks.tuning import plan_studies, run_tuning
+from sb3_aac.common.algorithms import SettingsError, hyperparameters, key_value
 from sb3_aac.common.output_files import check_writable_dir
 
 
@@ -154,6 +162,14 @@ def main(argv: list[str] | None = None) -> int:
         help="one Optuna journal file or database URL for all studies (default: a journal per study)",
     )
     parser.add_argument("--tuned-dir", default=None, help="folder of the tuned settings (default: hyperparams/tuned)")
+    parser.add_argument(
+        "--set",
+        metavar="KEY=VALUE",
+        type=key_value,
+        action="append",
+        default=[],
+        help="a SarsaAAC keyword argument for every selected cell (repeatable; untuned SarsaAAC cells only)",
+    )
     args = parser.parse_args(argv)
     signal.signal(signal.SIGTERM, _exit_on_sigterm)  # `kill` runs the cleanup of run_grid (workers end with us)
     _check_combinations(parser, args)
@@ -171,7 +187,7 @@ def main(argv: list[str] | None = None) -> int:
         shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv)
     )
     if args.preset:
-        grid = _with_tuned_settings(_grid(parser, args))
+        grid = _with_settings(parser, _with_tuned_settings(_grid(parser, args)), args.set)
         if args.list:
             for cell in grid:
                 print(f"{'done' if cells.is_finished(out, cell) else 'todo'}  {cell.cell_id}")
@@ -222,6 +238,8 @@ def _check_combinations(parser: argparse.ArgumentParser, args: argparse.Namespac
         parser.error("--address needs --engine ray")
     if args.cores and not args.estimate:
         parser.error("--cores belongs to --estimate")
+    if args.set and (args.estimate or args.tune or not args.preset):
+        parser.error("--set belongs to a grid run (--preset, without --estimate or --tune)")
     if args.shard and (args.estimate or args.tune or args.reliability):
         parser.error(
             "--shard splits the grid run only (not --estimate, --tune or --reliability; the reliability test runs on "
@@ -264,6 +282,22 @@ def _with_tuned_settings(grid: list[Cell]) -> list[Cell]:
     except ValueError as error:
         print(f"refused: {error}; or leave the tuned cells out with --only", file=sys.stderr)
         raise SystemExit(2) from None
+
+
+def _with_settings(parser: argparse.ArgumentParser, grid: list[Cell], pairs: list[tuple[str, Any]]) -> list[Cell]:
+    """The cells with ``--set``'s keyword arguments added to their overrides; exits (2) naming the problem if a cell
+    is not an untuned SarsaAAC cell or a key is not SarsaAAC's."""
+    if not pairs:
+        return grid
+    others = [cell.cell_id for cell in grid if cell.algo != "SarsaAAC" or is_tuned(cell.config)]
+    if others:
+        shown = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
+        parser.error(f"--set applies to untuned SarsaAAC cells only, and --only selects {shown}")
+    try:
+        settings = hyperparameters(pairs)
+    except SettingsError as error:
+        parser.error(str(error))
+    return [replace(cell, overrides={**cell.overrides, **settings}) for cell in grid]
 
 
 def _tuning_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -> bool:

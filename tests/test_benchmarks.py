@@ -14,6 +14,7 @@ import robocup_dribble
 from benchmarks import cells as cell_files
 from benchmarks import domains
 from benchmarks import run as bench_run
+from benchmarks.models import build_model
 from benchmarks.adapters import DiscreteActionAdapter, FlatActionAdapter, baseline_env, env_action_space
 from benchmarks.presets import ENV_IDS, FULL, LONG_BUDGET, WALL_CLOCK_SECONDS, Cell, build_cells, is_tuned, select
 from benchmarks.report import build_report
@@ -620,6 +621,10 @@ def test_a_cell_file_with_a_wrong_typed_field_is_damaged(tmp_path, field, value)
         (["--workers", "-3"], "must be >= 1"),
         (["--workers", "two"], "expected a whole number"),
         (["--players", "0"], "must be >= 1"),
+        (["--only", "PPO", "--set", "gamma=0.9"], "--set applies to untuned SarsaAAC cells only"),
+        (["--only", "tile", "--set", "gama=0.9"], "unknown --set key 'gama'"),
+        (["--only", "tile", "--set", "gamma"], "expected key=value"),
+        (["--set", "gamma=0.9", "--estimate"], "--set belongs to a grid run"),
     ],
 )
 def test_runner_refuses_bad_arguments_before_any_work(tmp_path, capsys, argv, message):
@@ -627,6 +632,23 @@ def test_runner_refuses_bad_arguments_before_any_work(tmp_path, capsys, argv, me
         bench_run.main(["--preset", "quick", "--out", str(tmp_path / "out"), *argv])
     assert info.value.code == 2 and message in capsys.readouterr().err
     assert not (tmp_path / "out" / "cells").exists()
+
+
+def test_set_runs_the_selected_sarsa_aac_cells_with_the_keyword_arguments(tmp_path, monkeypatch):
+    ran: list[Cell] = []
+
+    def fake_grid(grid, out, workers, engine=None):
+        ran.extend(grid)
+        return {"done": [c.cell_id for c in grid], "skipped": [], "failed": [], "busy": []}
+
+    monkeypatch.setattr(bench_run, "run_grid", fake_grid)
+    argv = ["--preset", "quick", "--only", "tile", "--set", "gamma=0.5", "--set", "n_tilings=4", "--allow-dirty"]
+    assert bench_run.main([*argv, "--out", str(tmp_path)]) == 0
+    assert [c.cell_id for c in ran] == [c.cell_id for c in select(build_cells("quick"), "tile")]
+    assert all(c.overrides == {"gamma": 0.5, "policy_kwargs": {"n_tilings": 4}} for c in ran)
+    model, _, _ = build_model(ran[0])
+    assert model.gamma == 0.5 and model.policy.n_tilings == 4
+    model.env.close()
 
 
 def test_runner_refuses_an_unwritable_out(tmp_path, capsys):
