@@ -339,7 +339,7 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 #   were chosen on a few of our tasks), PPO and HybridPPO wherever they run (their defaults are their libraries'),
 #   MP-DQN and TD3 on the paper env. Not tuned: MP-DQN on Platform and Goal, which runs the reference MP-DQN code's
 #   published settings (hyperparams/mpdqn.yml, tuned by its authors for those domains), and TD3 on v19 and
-#   CatchPoint, which runs its documented defaults; their studies and tuned twins would cost about 3 and 1.3
+#   CatchPoint, which runs its documented defaults; their studies and tuned twins would cost about 2.4 and 1.0
 #   core-hours (``--estimate``), more than a third of the grid.
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners.
