@@ -66,18 +66,24 @@ def journal_trials(path: Path, study_name: str) -> list[optuna.trial.FrozenTrial
 
 def test_the_plan_gives_every_learner_a_study_of_the_same_size():
     studies = plan_studies("full")
-    # SarsaAAC's TilePolicy and DeepPolicy on every env, and MP-DQN and TD3 on the paper env
-    sarsa = ("SarsaAAC-tile", "SarsaAAC-deep")
+    # SarsaAAC's TilePolicy and DeepPolicy on every env, HybridPPO and PPO where they run but on Sliding, and MP-DQN
+    # and TD3 on the paper env
+    sarsa, on_policy = ("SarsaAAC-tile", "SarsaAAC-deep"), ("HybridPPO", "PPO")
     assert [s.name for s in studies] == [
-        *("paper__SarsaAAC-tile", "paper__SarsaAAC-deep", "paper__MPDQN", "paper__TD3"),
-        *(f"{env}__{learner}" for env in ("v19", "platform", "goal", "catchpoint", "moving", "sliding") for learner in sarsa),
+        *("paper__SarsaAAC-tile", "paper__SarsaAAC-deep", "paper__MPDQN", "paper__TD3", "paper__HybridPPO", "paper__PPO"),
+        *(f"{env}__{learner}" for env in ("v19", "platform") for learner in (*sarsa, *on_policy)),
+        *(f"goal__{learner}" for learner in (*sarsa, "HybridPPO")),
+        *(f"catchpoint__{learner}" for learner in sarsa),
+        *(f"moving__{learner}" for learner in (*sarsa, *on_policy)),
+        *(f"sliding__{learner}" for learner in sarsa),
     ]
     for env_id in {s.env_id for s in studies}:
         sizes = {(s.trials, s.env_steps, s.seeds, s.evaluations, s.eval_episodes) for s in studies if s.env_id == env_id}
         assert len(sizes) == 1 and next(iter(sizes))[0] >= 20
     # a trial trains on the env's tune_steps
     assert {s.name: s.env_steps for s in plan_studies("full", 3, "paper__*")} == dict.fromkeys(
-        ("paper__SarsaAAC-tile", "paper__SarsaAAC-deep", "paper__MPDQN", "paper__TD3"), 20_000
+        ("paper__SarsaAAC-tile", "paper__SarsaAAC-deep", "paper__MPDQN", "paper__TD3", "paper__HybridPPO", "paper__PPO"),
+        20_000,
     )
     assert TUNE_SEED > 9 and TUNE_EVAL_SEED not in (10_000, 20_000, 30_000)  # none of the grid's seeds or sets
 
