@@ -336,11 +336,11 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 #   whose tuned twin is the headline row, with PAPER_SEEDS).
 # * ``tuned``: the learners with a tuning study (benchmarks.tuning: FULL_TUNING's size, ``tune_steps`` env steps a
 #   trial) and a tuned twin with HEADLINE_SEEDS: SarsaAAC's TilePolicy and DeepPolicy everywhere (their defaults
-#   were chosen on a few of our tasks), PPO and HybridPPO wherever they run but on Sliding-v0 (their defaults are
-#   their libraries'), MP-DQN and TD3 on the paper env. Not tuned: MP-DQN on Platform and Goal, which runs the
-#   reference MP-DQN code's published settings (hyperparams/mpdqn.yml, tuned by its authors for those domains), TD3
-#   on v19 and CatchPoint, and PPO and HybridPPO on Sliding-v0, which run their documented defaults; their studies
-#   and tuned twins would cost about 2.4, 1.0 and 0.6 core-hours (``--estimate``), half the grid again.
+#   were chosen on a few of our tasks), PPO and HybridPPO on the dribbling envs, Goal (HybridPPO) and Moving (their
+#   defaults are their libraries'), MP-DQN and TD3 on the paper env. Not tuned: MP-DQN on Platform and Goal, which
+#   runs the reference MP-DQN code's published settings (hyperparams/mpdqn.yml, tuned by its authors for those
+#   domains), TD3 on v19 and CatchPoint, and PPO and HybridPPO on Platform and Sliding, which run their documented
+#   defaults; their studies and tuned twins would cost about 2.4, 1.0 and 1.2 core-hours (``--estimate``).
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners.
 #
@@ -435,7 +435,7 @@ FULL: dict[str, Any] = {
                 # MP-DQN: the reference settings; published 0.987
                 *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "MPDQN"),
             ],
-            _learners(*_SARSA_HEADLINE, *_ON_POLICY),
+            _learners(*_SARSA_HEADLINE),
             10_000,
             **_EPISODIC_SIZES,
         ),
