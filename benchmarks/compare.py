@@ -16,29 +16,24 @@ from __future__ import annotations
 
 import argparse
 import json
-from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from benchmarks import domains
 from benchmarks.cells import load_cells
-from benchmarks.presets import budget_label, config_label
+from benchmarks.groups import Group, group_results
+from benchmarks.presets import budget_label
 from benchmarks.significance import MIN_SEEDS, compare, iqm
 from benchmarks.tuned import TUNED_PARAMS, TUNING_RECORD
 
-GroupKey = tuple[str, str, str, int, int]  # env id, algo, config, env-step budget, seconds
 SWAPPED = {"A better": "B better", "B better": "A better"}  # compare(B's scores, A's) names B "A"
 
 
-def _by_group(results: list[dict[str, Any]]) -> dict[GroupKey, dict[int, dict[str, Any]]]:
-    groups: dict[GroupKey, dict[int, dict[str, Any]]] = defaultdict(dict)
-    for r in results:
-        c = r["cell"]
-        if c["algo"] != "Reference" and "final" in r:
-            groups[(c["env_id"], c["algo"], c["config"], c["budget"], c.get("seconds", 0))][c["seed"]] = r
-    return groups
+def _by_group(folder: Path) -> dict[tuple[str, str, str, int, int], Group]:
+    """The report's groups of a folder (:func:`benchmarks.groups.group_results`) by env, algo, config, budget, seconds."""
+    groups, _ = group_results(load_cells(folder))
+    return {(g.env_id, g.algo, g.config, g.budget, g.seconds): g for env in groups.values() for g in env}
 
 
 def _settings(runs: list[dict[str, Any]]) -> str:
@@ -54,35 +49,35 @@ def _settings(runs: list[dict[str, Any]]) -> str:
 
 def compare_folders(a: Path, b: Path, min_seeds: int = MIN_SEEDS) -> list[str]:
     """Markdown lines: one table row per group both folders hold (see the module docstring)."""
-    groups_a, groups_b = _by_group(load_cells(a)), _by_group(load_cells(b))
-    lines = [
+    groups_a, groups_b = _by_group(a), _by_group(b)
+    header = [
         f"A: {a}; B: {b}; verdict of B against A (Welch, two-sided, at least {min_seeds} seeds a side)",
         "",
         "| env | learner | budget | seeds | A settings | B settings | A mean (IQM) | B mean (IQM) | B - A | Welch p "
         "| verdict |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    shared = sorted(set(groups_a) & set(groups_b))
-    for key in shared:
-        env_id, algo, config, budget, seconds = key
-        seeds = sorted(set(groups_a[key]) & set(groups_b[key]))
+    rows = []
+    for key in sorted(set(groups_a) & set(groups_b)):
+        group_a, group_b = groups_a[key], groups_b[key]
+        by_seed_a = {r["cell"]["seed"]: r for r in group_a.runs}
+        by_seed_b = {r["cell"]["seed"]: r for r in group_b.runs}
+        seeds = sorted(set(by_seed_a) & set(by_seed_b))
         if not seeds:
             continue
-        runs_a, runs_b = [groups_a[key][s] for s in seeds], [groups_b[key][s] for s in seeds]
-        metric = domains.metric(env_id)
-        sa = np.array([r["final"][metric] for r in runs_a], dtype=float)
-        sb = np.array([r["final"][metric] for r in runs_b], dtype=float)
+        runs_a, runs_b = [by_seed_a[s] for s in seeds], [by_seed_b[s] for s in seeds]
+        sa = np.array([r["final"][group_a.metric] for r in runs_a], dtype=float)
+        sb = np.array([r["final"][group_b.metric] for r in runs_b], dtype=float)
         result = compare(sb, sa, min_seeds=min_seeds) if len(seeds) >= 2 else None  # its "A" is folder B
         outcome = "too few seeds" if result is None else SWAPPED.get(result.outcome, result.outcome)
         p = f"{result.welch_p:.3g}" if result is not None else "-"
-        lines.append(
-            f"| {env_id} | {config_label(algo, config)} | {f'{seconds} s' if seconds else budget_label(budget)} | "
-            f"{len(seeds)} | {_settings(runs_a)} | {_settings(runs_b)} | {sa.mean():.3f} ({iqm(sa):.3f}) | "
-            f"{sb.mean():.3f} ({iqm(sb):.3f}) | {sb.mean() - sa.mean():+.3f} | {p} | {outcome} |"
+        budget = f"{group_a.seconds} s" if group_a.seconds else budget_label(group_a.budget)
+        rows.append(
+            f"| {group_a.env_id} | {group_a.label} | {budget} | {len(seeds)} | {_settings(runs_a)} | "
+            f"{_settings(runs_b)} | {sa.mean():.3f} ({iqm(sa):.3f}) | {sb.mean():.3f} ({iqm(sb):.3f}) | "
+            f"{sb.mean() - sa.mean():+.3f} | {p} | {outcome} |"
         )
-    if len(lines) == 4:
-        lines.append("(no group with seeds in both folders)")
-    return lines
+    return header + (rows or ["(no group with seeds in both folders)"])
 
 
 def _folder(text: str) -> Path:
