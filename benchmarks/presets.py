@@ -163,14 +163,14 @@ ON_POLICY = ("PPO", "A2C")
 
 # Env steps per second of training on one core, per algorithm (a "<algo>-<config>" key for a config that differs),
 # at the settings above on the dribbling env, whose lanes step in compiled code: the median of env_steps /
-# train_wall_s over the finished cells of benchmarks/results (50k steps, load 2-3 on two cores; DeepPolicy's with its
-# defaults of critic and replay, the paper env's and v19's cells 1,660 each); HybridPPO (no such cells) as its
-# same-run ratio to PPO times PPO's figure (docs/benchmarks.md, "Cost"). With ENV_STEP_SECONDS they give a learner's rate on each env (training_rate): the local pool starts the
+# train_wall_s over the finished cells of benchmarks/results (50k steps, load 2-3 on two cores); DeepPolicy and
+# HybridPPO (no such cells) as their same-run ratio to TilePolicy and PPO times those figures (docs/benchmarks.md,
+# "Cost"). With ENV_STEP_SECONDS they give a learner's rate on each env (training_rate): the local pool starts the
 # longest cells first, a wall-clock cell's schedule horizon is WALL_CLOCK_HEADROOM times what its learner steps in
 # its seconds, and benchmarks.cost estimates a preset's core-hours.
 STEPS_PER_SECOND = {
     "SarsaAAC": 30_000,
-    "SarsaAAC-deep": 1_650,
+    "SarsaAAC-deep": 7_000,
     "PPO": 9_300,
     "A2C": 11_700,
     "SAC": 290,
@@ -198,8 +198,8 @@ ENV_STEP_SECONDS = {
 
 # A wall-clock cell's env-step horizon is this many times what its learner usually steps in its seconds
 # (training_rate), so that the clock, not the horizon, ends its training on a quiet machine too: at 1.0 the measured
-# rates of TilePolicy, DeepPolicy (with CACLA and no replay) and MP-DQN (38k, 11.7k and 400 env steps/s on the paper
-# env's 120 s cells, above the 30k, 7k and 250 this table then held) ended them by the horizon after 75-97 s, and on Half Field Offense MP-DQN and
+# rates of TilePolicy, DeepPolicy and MP-DQN (38k, 11.7k and 400 env steps/s on the paper env's 120 s cells, above
+# STEPS_PER_SECOND's 30k, 7k and 250) ended them by the horizon after 75-97 s, and on Half Field Offense MP-DQN and
 # P-DQN after 166-207 s of 300. The schedules run over the horizon, so they are at least half done at the stop.
 WALL_CLOCK_HEADROOM = 2.0
 

@@ -73,7 +73,7 @@ timed; the figure is the best of ``--repeats`` timings. One torch and one BLAS t
 
 Usage: ``python -m benchmarks.speed.training deep [--env navigation|RoboCupDribblePaper-v0] [--steps 3000] [--lanes 16]
 [--parameter-update cacla|critic] [--policy DeepPolicy] [--set KEY=VALUE ...]`` (SarsaAAC's ``parameter_update``: the
-paper's CACLA or with the critic of the parameters; by default the policy's own). ``--policy`` times another SarsaAAC policy in
+paper's CACLA, the default, or with the critic of the parameters). ``--policy`` times another SarsaAAC policy in
 DeepPolicy's place, with its defaults (DeepPolicy with ``trace_lambda=0.8``); ``--set`` overrides SarsaAAC's
 arguments, e.g. ``--policy MlpPolicy --set replay_ratio=0`` against the default replay.
 
@@ -272,9 +272,7 @@ def deep_main(argv: list[str]) -> None:
     parser.add_argument("--warmup", type=int, default=500, help="untimed env steps first (TD3 learns from step 100)")
     parser.add_argument("--repeats", type=int, default=2, help="timed runs (the best is reported)")
     parser.add_argument("--lanes", type=int, default=16, help="lanes of the second DeepPolicy run")
-    parser.add_argument(
-        "--parameter-update", default=None, help="SarsaAAC's parameter_update: cacla or critic (default: the policy's)"
-    )
+    parser.add_argument("--parameter-update", default="cacla", help="SarsaAAC's parameter_update: cacla or critic")
     parser.add_argument("--policy", default="DeepPolicy", help="the SarsaAAC policy timed")
     parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="SarsaAAC keyword arguments")
     args = parser.parse_args(argv)
@@ -292,7 +290,7 @@ def deep_main(argv: list[str]) -> None:
         model = SarsaAAC(args.policy, env, seed=0, parameter_update=args.parameter_update, **settings)
         deep = steps_per_second(model, args.steps, args.warmup, args.repeats)
         described = ", ".join(f"{key}={value}" for key, value in settings.items())
-        name = f"SarsaAAC {args.policy} ({lanes} lanes, {described + ', ' if described else ''}{model.parameter_update})"
+        name = f"SarsaAAC {args.policy} ({lanes} lanes, {described + ', ' if described else ''}{args.parameter_update})"
         print(f"{name:64s} {deep:10.0f}   {deep / td3:6.1f}x TD3")
 
 

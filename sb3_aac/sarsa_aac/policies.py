@@ -51,9 +51,6 @@ class SarsaAACPolicy(BasePolicy):
     # SarsaAAC's replay_ratio when none is given: replayed transitions per live one where replay wins per second as
     # well as per sample on the paper env (docs/sarsa_aac_results.md, "Replay of recent transitions"), else 0.
     default_replay_ratio: ClassVar[int] = 0
-    # SarsaAAC's parameter_update when none is given: the paper's CACLA, except where the critic of the parameters
-    # won on the benchmark's domains (docs/sarsa_aac_results.md, "DeepPolicy's defaults").
-    default_parameter_update: ClassVar[str] = "cacla"
 
     def __init__(
         self,
@@ -394,11 +391,6 @@ class DeepPolicy(NumpyBankPolicy):
     approximators: DeepBank
     # SarsaAAC's rates are ObGD's step size alpha here; its figures in docs/sarsa_aac_results.md were measured with 0.5.
     default_learning_rate: ClassVar[float] = 0.5
-    # The critic of the parameters with three replayed transitions per live one: better than CACLA without replay on
-    # six of the benchmark's seven domains at 10 seeds and worse on none (docs/sarsa_aac_results.md,
-    # "DeepPolicy's defaults").
-    default_parameter_update: ClassVar[str] = "critic"
-    default_replay_ratio: ClassVar[int] = 3
 
     def __init__(
         self,

@@ -126,15 +126,13 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
     :param param_noise_final: Final standard deviation of the parameter noise
     :param parameter_update: The parameter actor's update: ``"cacla"`` (the paper's: toward the executed parameters
         where ``delta > 0``) or ``"critic"`` (toward them where a critic of the parameters, learned online at the
-        critic's rate, says they gain; :mod:`sb3_aac.sarsa_aac.parameter_critic`); None (the default) takes the
-        policy's ``default_parameter_update`` (``"critic"`` for DeepPolicy, ``"cacla"`` for the others)
+        critic's rate, says they gain; :mod:`sb3_aac.sarsa_aac.parameter_critic`)
     :param trace_lambda: The eligibility-trace decay ``lambda`` in ``[0, 1]`` of the critic and the action-type
         actor; 0 (the default) is the one-step update; ``> 0`` needs TilePolicy or DeepPolicy
     :param replacing_traces: Replacing traces (a visited feature's trace is set to 1, and its traces of the
         other action types to 0) if True, accumulating traces (1 is added) if False
     :param replay_ratio: Replayed transitions per live one, a whole number ``>= 0`` (0: no replay); None (the
-        default) takes the policy's ``default_replay_ratio`` (3 for DeepPolicy, 2 for MlpPolicy and RbfMlpPolicy, 0
-        for the others)
+        default) takes the policy's ``default_replay_ratio`` (2 for MlpPolicy and RbfMlpPolicy, 0 for the others)
     :param replay_size: How many recent transitions (of all lanes) the replay buffer holds
     :param info_keywords: Keys of ``info`` read at the step where an episode ends and logged as
         ``rollout/ep_<key>_mean`` (mean over the last ``stats_window_size`` episodes that reported it)
@@ -188,7 +186,7 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
         exploration_final_eps: float = 0.05,
         param_noise_initial: float = 0.3,
         param_noise_final: float = 0.05,
-        parameter_update: str | None = None,
+        parameter_update: str = "cacla",
         trace_lambda: float = 0.0,
         replacing_traces: bool = True,
         replay_ratio: int | None = None,
@@ -230,9 +228,7 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
         self.exploration_final_eps = exploration_final_eps
         self.param_noise_initial = param_noise_initial
         self.param_noise_final = param_noise_final
-        self.parameter_update = (
-            self.policy_class.default_parameter_update if parameter_update is None else parameter_update  # type: ignore[attr-defined]
-        )
+        self.parameter_update = parameter_update
         self.trace_lambda = trace_lambda
         self.replacing_traces = replacing_traces
         self.replay_ratio = self.policy_class.default_replay_ratio if replay_ratio is None else replay_ratio  # type: ignore[attr-defined]
