@@ -411,7 +411,7 @@ FULL: dict[str, Any] = {
                 *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep"),
                 # MP-DQN's and TD3's defaults with the 5 seeds a tuned-against-default verdict needs
                 *_runs(PAPER_SEEDS, "MPDQN", "TD3", *(f"SarsaAAC-{c}" for c in _PAPER_CONFIGS)),
-                *_runs(FEW_SEEDS, "HybridPPO", "PPO", "A2C", "DQN"),
+                *_runs(FEW_SEEDS, "HybridPPO", "PPO", "A2C", "DQN", "PDQN", "SAC", "DDPG"),
             ],
             _learners(*_PAPER_HEADLINE, *_ON_POLICY),
             20_000,
