@@ -16,9 +16,13 @@ from tests.test_benchmarks import synthetic_cell
 ENV_ID = "RoboCupDribblePaper-v0"
 
 
-def write(folder, seed, final, overrides=None, config="deep"):
+def write(folder, seed, final, overrides=None, config="deep", wall_clock=None):
+    """A cell's file; ``wall_clock=(seconds, horizon)`` makes it a wall-clock cell (its id names the seconds)."""
     result = synthetic_cell(ENV_ID, "SarsaAAC", config, seed, final, "Deep")
     result["cell"]["overrides"] = overrides or {}
+    if wall_clock:
+        result["cell"]["seconds"], result["cell"]["budget"] = wall_clock
+        result["cell_id"] = result["cell_id"].rsplit("__", 1)[0] + f"__{wall_clock[0]}s"
     path = cell_path(folder, result["cell_id"])
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(result))
@@ -58,6 +62,16 @@ def test_fewer_seeds_than_asked_give_no_verdict_and_a_swap_of_folders_swaps_it(t
     assert table_rows(bench_compare.compare_folders(a, b))[0][-1].rstrip(" |") == "too few seeds"  # 10 by default
     assert table_rows(bench_compare.compare_folders(a, b, min_seeds=5))[0][-1].rstrip(" |") == "A better"
     assert table_rows(bench_compare.compare_folders(b, a, min_seeds=5))[0][-1].rstrip(" |") == "B better"
+
+
+def test_wall_clock_groups_pair_by_their_seconds_whatever_their_horizons(tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    for seed in range(5):
+        write(a, seed, 30.0 + 0.1 * seed, wall_clock=(120, 1_668_322))
+        write(b, seed, 28.0 + 0.1 * seed, wall_clock=(120, 396_000))  # a slower learner's horizon
+        write(b, seed, 28.0 + 0.1 * seed, wall_clock=(60, 396_000))  # other seconds: left out
+    ((_, _, budget, seeds, *_, verdict),) = table_rows(bench_compare.compare_folders(a, b, min_seeds=5))
+    assert (budget, seeds, verdict.rstrip(" |")) == ("120 s", "5", "A better")
 
 
 @pytest.mark.parametrize(
