@@ -337,10 +337,10 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 # * ``tuned``: the learners with a tuning study (benchmarks.tuning: FULL_TUNING's size, ``tune_steps`` env steps a
 #   trial) and a tuned twin with HEADLINE_SEEDS: SarsaAAC's TilePolicy and DeepPolicy everywhere (their defaults
 #   were chosen on a few of our tasks), PPO and HybridPPO on the dribbling envs, HybridPPO on Goal and Moving (their
-#   defaults are their libraries'), MP-DQN and TD3 on the paper env. Not tuned: MP-DQN on Platform and Goal, which
-#   runs the reference MP-DQN code's published settings (hyperparams/mpdqn.yml, tuned by its authors for those
-#   domains), TD3 on v19 and CatchPoint, PPO and HybridPPO on Platform and Sliding, and PPO on Moving, which run their
-#   documented defaults; their studies and tuned twins would cost about 2.4, 1.0 and 1.2 core-hours (``--estimate``)
+#   defaults are their libraries'), MP-DQN on the paper env, TD3 on the paper env, v19 and CatchPoint. Not tuned:
+#   MP-DQN on Platform and Goal, which runs the reference MP-DQN code's published settings (hyperparams/mpdqn.yml,
+#   tuned by its authors for those domains), PPO and HybridPPO on Platform and Sliding, and PPO on Moving, which run
+#   their documented defaults; their studies and tuned twins would cost about 2.4 and 1.2 core-hours (``--estimate``)
 #   and PPO's on Moving more than its estimate (rl-zoo3's space reaches settings whose trials ran up to 488 s).
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners.
@@ -426,7 +426,7 @@ FULL: dict[str, Any] = {
             [
                 *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "PPO", "TD3", "HybridPPO"),
             ],
-            _learners(*_SARSA_HEADLINE, *_ON_POLICY),
+            _learners(*_SARSA_HEADLINE, *_ON_POLICY, "TD3"),
             20_000,
             long={"budget": LONG_BUDGET, "runs": _runs(LONG_SEEDS, "SarsaAAC-tile")},
         ),
@@ -453,7 +453,7 @@ FULL: dict[str, Any] = {
         "CatchPoint-v0": _env(
             50_000,
             _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "TD3"),
-            _learners(*_SARSA_HEADLINE),
+            _learners(*_SARSA_HEADLINE, "TD3"),
             25_000,
             **_EPISODIC_SIZES,
         ),
