@@ -92,6 +92,34 @@ def test_one_lane_step_is_stream_obgd(trace_lambda: float) -> None:
         np.testing.assert_allclose(getattr(bank, name).detach(), expected, rtol=1e-9, atol=1e-12)
 
 
+def test_a_forward_of_some_roles_runs_and_updates_those_networks_alone() -> None:
+    """``forward(obs, roles)`` gives those networks' outputs as the full pass does and 0 for the others, and
+    ``update`` on its cache moves those networks exactly as on the full pass's cache and no other network."""
+    model = SarsaAAC("DeepPolicy", ParameterizedTargetEnv(), seed=0)
+    model.learn(50)
+    policy, bank = model.policy, model.policy.approximators
+    assert isinstance(bank, DeepBank)
+    obs = np.random.default_rng(1).uniform(-1, 1, (3, 2))
+    kernel = policy.kernel()
+    full, full_cache = kernel.forward(obs)
+    part, part_cache = kernel.forward(obs, ("q", "params"))
+    v = policy.value_index
+    np.testing.assert_array_equal(part[:, :v], full[:, :v])
+    assert np.all(part[:, v] == 0.0)
+    err = np.random.default_rng(2).normal(size=full.shape)
+    lr, gain = np.full(policy.n_outputs, 0.5), np.ones(policy.n_outputs)
+    start = {name: value.clone() for name, value in bank.state_dict().items()}
+    kernel.update(full_cache, err, lr, gain)
+    moved_by_full = {name: value.clone() for name, value in bank.state_dict().items()}
+    bank.load_state_dict(start)
+    kernel.update(part_cache, err, lr, gain)
+    value_net = f"net{bank.roles.index('value')}_"
+    for name, value in bank.state_dict().items():
+        expected = start[name] if name.startswith(value_net) else moved_by_full[name]
+        assert th.equal(value, expected), name
+    assert any(not th.equal(moved_by_full[n], start[n]) for n in start if n.startswith(value_net))
+
+
 @pytest.mark.slow
 def test_lanes_learn_alike_per_env_step() -> None:
     """

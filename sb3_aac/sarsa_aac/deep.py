@@ -46,6 +46,7 @@ backward pass and the steps in numpy, on zero-copy views of the parameters.
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -280,14 +281,19 @@ class DeepKernel(NetworkForward):
             np.sqrt(self._obs_m2 / total + OBS_VARIANCE_EPS, out=self._obs_half)
             self.set_input_scaling(self._obs_mid, self._obs_half)
 
-    def forward(self, obs: np.ndarray) -> tuple[np.ndarray, DeepCache]:
-        """``obs``: ``(n, D)`` -> outputs ``(n, A)`` and the cache for :meth:`update`."""
+    def forward(self, obs: np.ndarray, roles: Collection[str] | None = None) -> tuple[np.ndarray, DeepCache]:
+        """
+        ``obs``: ``(n, D)`` -> outputs ``(n, A)`` and the cache for :meth:`update`. With ``roles`` (of ``"q"``,
+        ``"params"``, ``"value"``), only those networks run: the others' outputs are 0 and :meth:`update` leaves them
+        (and their traces) as they are.
+        """
         x = self.features(obs)
-        out = np.empty((len(x), self.n_outputs))
+        out = np.empty((len(x), self.n_outputs)) if roles is None else np.zeros((len(x), self.n_outputs))
         layers: list[list[tuple[np.ndarray, ...]]] = []
         for i, (start, stop) in enumerate(self.columns):
             layers.append([])
-            out[:, start:stop] = self.network(i, x, layers[-1])
+            if roles is None or self.roles[i] in roles:
+                out[:, start:stop] = self.network(i, x, layers[-1])
         return out, DeepCache(layers)
 
     def update(
@@ -302,7 +308,8 @@ class DeepKernel(NetworkForward):
         """
         One ObGD step of every network for a batch of samples (see the module docstring), in place.
 
-        :param cache: from :meth:`forward` on the same weights; its first ``n`` rows are used
+        :param cache: from :meth:`forward` on the same weights; its first ``n`` rows are used; the networks it did not
+            run are not updated
         :param err: ``(n, A)`` target minus output (SarsaAAC's layout: the chosen type's SARSA error in its Q column,
             CACLA errors of the chosen type's parameters, the TD error in the V column; 0 elsewhere)
         :param lr: ``(A,)`` ObGD's ``alpha`` of each output's network (read at the network's first column)
@@ -313,6 +320,8 @@ class DeepKernel(NetworkForward):
         """
         n = len(err)
         for i, (start, stop) in enumerate(self.columns):
+            if not cache.layers[i]:  # not run by forward
+                continue
             role = self.roles[i]
             unit = 1.0 if hidden_gain is None else float(hidden_gain[start]) ** -0.5
             e = err[:, start:stop] / unit

@@ -95,7 +95,8 @@ class ParameterCritic(nn.Module):
         if observe and isinstance(model, DeepPolicy):
             model.approximators.observe(obs)
         kernel = model.kernel()
-        out, cache = kernel.forward(obs)
+        # b_k and g_k: the "q" and "params" columns; a deep critic skips its unused value network.
+        out, cache = kernel.forward(obs, ("q", "params")) if isinstance(kernel, DeepKernel) else kernel.forward(obs)
         if not math.isfinite(out.sum()):
             raise FloatingPointError(
                 "SarsaAAC's parameter critic has non-finite outputs: lower learning_rate (its rate), or use "
