@@ -6,8 +6,8 @@ candidate default run with ``benchmarks.run --set`` against the grid's own cells
     python -m benchmarks.compare benchmarks/results DIR [--min-seeds 5]
 
 For each group of cells (env, learner, budget; a wall-clock cell's budget is its seconds, its env-step horizon
-follows the learner's training rate and may differ between the folders) with seeds in both folders, on the seeds both hold: each side's
-settings (the cells' overrides), mean and IQM of the final score (the env's metric), and the verdict of
+follows the learner's training rate and may differ between the folders) with seeds in both folders, on the seeds
+both hold: each side's settings (the cells' overrides), mean and IQM of the final score (the env's metric), and the verdict of
 :func:`benchmarks.significance.compare` on B against A (Welch's two-sided test on the difference of the means;
 "too few seeds" below ``--min-seeds``, by default the report's :data:`~benchmarks.significance.MIN_SEEDS`).
 Groups only one folder holds are left out, and so are the references.
@@ -35,9 +35,7 @@ def _by_group(folder: Path) -> dict[tuple[str, str, str, int, int], Group]:
     """The report's groups of a folder (:func:`benchmarks.groups.group_results`) by env, algo, config, budget (0 for a
     wall-clock group: its horizon is not its budget), seconds."""
     groups, _ = group_results(load_cells(folder))
-    return {
-        (g.env_id, g.algo, g.config, 0 if g.seconds else g.budget, g.seconds): g for env in groups.values() for g in env
-    }
+    return {(g.env_id, g.algo, g.config, 0 if g.seconds else g.budget, g.seconds): g for env in groups.values() for g in env}
 
 
 def _settings(runs: list[dict[str, Any]]) -> str:
