@@ -163,9 +163,10 @@ ON_POLICY = ("PPO", "A2C")
 
 # Env steps per second of training on one core, per algorithm (a "<algo>-<config>" key for a config that differs),
 # at the settings above on the dribbling env, whose lanes step in compiled code: the median of env_steps /
-# train_wall_s over the finished cells of benchmarks/results (50k steps, load 2-3 on two cores); DeepPolicy and
-# HybridPPO (no such cells) as their same-run ratio to TilePolicy and PPO times those figures (docs/benchmarks.md,
-# "Cost"). With ENV_STEP_SECONDS they give a learner's rate on each env (training_rate): the local pool starts the
+# train_wall_s over the finished cells of benchmarks/results (50k steps, load 2-3 on two cores; SAC's, DDPG's and
+# P-DQN's paper-env cells ran three processes on two cores, so their medians 74, 145 and 209 times 1.5, P-DQN's
+# agreeing with the 350 it had); DeepPolicy and HybridPPO (no such cells) as their same-run ratio to TilePolicy and PPO
+# times those figures (docs/benchmarks.md, "Cost"). With ENV_STEP_SECONDS they give a learner's rate on each env (training_rate): the local pool starts the
 # longest cells first, a wall-clock cell's schedule horizon is WALL_CLOCK_HEADROOM times what its learner steps in
 # its seconds, and benchmarks.cost estimates a preset's core-hours.
 STEPS_PER_SECOND = {
@@ -173,11 +174,11 @@ STEPS_PER_SECOND = {
     "SarsaAAC-deep": 7_000,
     "PPO": 9_300,
     "A2C": 11_700,
-    "SAC": 75,
+    "SAC": 110,
     "TD3": 570,
-    "DDPG": 145,
+    "DDPG": 215,
     "DQN": 1_300,
-    "PDQN": 210,
+    "PDQN": 350,
     "MPDQN": 250,
     "HybridPPO": 7_600,
 }
