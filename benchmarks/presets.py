@@ -165,10 +165,10 @@ ON_POLICY = ("PPO", "A2C")
 # at the settings above on the dribbling env, whose lanes step in compiled code: the median of env_steps /
 # train_wall_s over the finished cells of benchmarks/results (50k steps, load 2-3 on two cores; SAC's, DDPG's and
 # P-DQN's paper-env cells ran three processes on two cores, so their medians 74, 145 and 209 times 1.5, P-DQN's
-# agreeing with the 350 it had); DeepPolicy and HybridPPO (no such cells) as their same-run ratio to TilePolicy and PPO
-# times those figures (docs/benchmarks.md, "Cost"). With ENV_STEP_SECONDS they give a learner's rate on each env (training_rate): the local pool starts the
-# longest cells first, a wall-clock cell's schedule horizon is WALL_CLOCK_HEADROOM times what its learner steps in
-# its seconds, and benchmarks.cost estimates a preset's core-hours.
+# agreeing with the 350 it had); DeepPolicy and HybridPPO (no such cells) as their same-run ratio to TilePolicy and
+# PPO times those figures (docs/benchmarks.md, "Cost"). With ENV_STEP_SECONDS they give a learner's rate on each env
+# (training_rate): the local pool starts the longest cells first, a wall-clock cell's schedule horizon is
+# WALL_CLOCK_HEADROOM times what its learner steps in its seconds, and benchmarks.cost estimates a preset's core-hours.
 STEPS_PER_SECOND = {
     "SarsaAAC": 30_000,
     "SarsaAAC-deep": 7_000,
