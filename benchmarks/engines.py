@@ -27,6 +27,7 @@ import os
 import re
 import shutil
 import socket
+import sys
 import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -108,6 +109,19 @@ def write_cell_files(out: Path, cell_id: str, files: dict[str, bytes]) -> None:
             (out / "errors" / f"{cell_id}.txt").unlink()
 
 
+def local_ray_root() -> str:
+    """A fresh directory for a Ray instance this driver starts (``ray.init(_temp_dir=...)``): ``sb3-aac-ray-*`` in
+    the directory Ray itself would use (``$RAY_TMPDIR``, else ``$TMPDIR`` on Linux, else ``/tmp`` on Linux and
+    macOS, whose long temporary paths would overflow the length of a Unix socket's path, else the system's). Ray
+    keeps its logs there after the run, as it keeps its sessions in ``/tmp/ray``."""
+    parent = os.environ.get("RAY_TMPDIR")
+    if parent is None and sys.platform.startswith("linux"):
+        parent = os.environ.get("TMPDIR")
+    if parent is None and sys.platform.startswith(("linux", "darwin")):
+        parent = "/tmp"
+    return tempfile.mkdtemp(prefix="sb3-aac-ray-", dir=parent)
+
+
 class RayEngine:
     """Each cell a Ray task (one CPU), results written by the driver.
 
@@ -158,7 +172,8 @@ class RayEngine:
         Ray initialised for the block: the connection this process has (left open), or one opened here and shut
         down at the end. A Ray instance started here (no ``address``) ends with this process however it ends: Ray
         fate-shares its GCS server and raylet with the driver, and a :class:`~benchmarks.process_reaper.ProcessReaper`
-        ends the rest (the raylet's agents) if the driver is killed.
+        ends the rest (the raylet's agents, a worker being started) if the driver is killed; its temporary directory
+        (sockets, logs) is a fresh one of :func:`local_ray_root`'s, claimed for the watchdog before Ray starts.
         """
         import ray  # optional (sb3-aac[distributed]): imported only when a Ray engine runs
 
@@ -168,9 +183,10 @@ class RayEngine:
         with contextlib.ExitStack() as stack:
             if self.address is None:
                 reaper = stack.enter_context(ProcessReaper())
-                context = ray.init(num_cpus=self.num_cpus, include_dashboard=False, log_to_driver=False)
+                root = local_ray_root()
+                reaper.claim(root)  # before Ray starts: a process it starts is claimed however early the driver dies
+                ray.init(num_cpus=self.num_cpus, include_dashboard=False, log_to_driver=False, _temp_dir=root)
                 stack.callback(ray.shutdown)
-                reaper.claim(context.address_info["session_dir"])
             else:
                 ray.init(address=self.address, log_to_driver=False)
                 stack.callback(ray.shutdown)

@@ -11,10 +11,12 @@ driver's processes two ways, both limited to processes started after the watchdo
 
 * by ancestry: it notes the driver's descendants, every :data:`POLL_MIN_SECONDS` while the process tree changes,
   backing off to :data:`POLL_MAX_SECONDS` while it does not (this covers a driver killed while Ray starts);
-* by directory: once the driver names a directory (:meth:`ProcessReaper.claim`, Ray's session directory), every
-  process of this user whose command line names it (a starting Ray worker) or that has a file open in it (each of
-  Ray's processes writes its log there, the agents included), found when the driver is gone, so none started in
-  the last poll escapes (nor another program reading those logs).
+* by directory: once the driver names a directory (:meth:`ProcessReaper.claim`: the Ray instance's temporary
+  directory, named before Ray starts), every process of this user whose command line names it (a starting Ray
+  worker) or that has a file open in it (each of Ray's processes writes its log there, the agents included), found
+  when the driver is gone, so none started in the last poll escapes (nor another program reading those logs).
+  (Ancestry alone misses a worker the raylet started in the last poll: the raylet ends with the driver, and its
+  children are nobody's then.)
 
 Processes are held as ``psutil.Process`` objects, which refuse to signal a process whose id was reused. When the
 driver is gone (its end of the watchdog's stdin closes without :data:`STOP`), the watchdog sends SIGTERM to every such

@@ -208,12 +208,12 @@ RAY_GONE_SECONDS = 15.0  # the reaper's grace (2 s) after the runner's pipe clos
 
 @pytest.mark.slow
 def test_a_killed_ray_runner_leaves_no_process_of_its_ray_instance(tmp_path: Path) -> None:
-    """``--engine ray`` without ``--address`` starts Ray here; SIGKILL the runner once the raylet's agents run. Within
-    RAY_GONE_SECONDS no process of that Ray instance is left: none of the runner's descendants (its watchdog, GCS,
-    raylet, agents, workers), and no process naming the instance's session directory (``session_..._<runner pid>``)."""
+    """``--engine ray`` without ``--address`` starts Ray here; SIGKILL the runner as soon as the raylet's agents run,
+    while Ray still starts (its workers, the driver's ``ray.init``). Within RAY_GONE_SECONDS no process of that Ray
+    instance is left: none of the runner's descendants (its watchdog, GCS, raylet, agents, workers), and no process
+    naming the instance's session directory (``session_..._<runner pid>``)."""
     pytest.importorskip("ray", reason="Ray is not installed (pip install sb3-aac[distributed])")
     pytest.importorskip("psutil", reason="the Ray engine's watchdog needs psutil (pip install sb3-aac[distributed])")
-    from benchmarks.process_reaper import POLL_MAX_SECONDS
 
     argv = ["--preset", "quick", "--only", "paper__SarsaAAC-tile__s0__20k", "--engine", "ray", "--workers", "1"]
     runner = subprocess.Popen(
@@ -229,8 +229,6 @@ def test_a_killed_ray_runner_leaves_no_process_of_its_ray_instance(tmp_path: Pat
             agents = {pid for pid in seen if command_line(pid).startswith(RAY_AGENTS)}
             time.sleep(0.1)
         assert len(agents) == len(RAY_AGENTS), f"the Ray agents did not start (runner exit {runner.poll()})"
-        time.sleep(2 * POLL_MAX_SECONDS)  # the watchdog has noted them
-        seen |= descendants(runner.pid)
         session = next(match[0] for pid in seen if (match := re.search(r"session_[0-9_-]+", command_line(pid))))
     finally:
         runner.kill()

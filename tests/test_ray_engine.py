@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 
 import pytest
 
@@ -123,3 +124,33 @@ def test_bad_engine_settings_are_refused():
         RayEngine(max_retries=-1)
     with pytest.raises(ValueError, match="num_cpus"):
         RayEngine(num_cpus=0)
+
+
+def test_a_local_instance_is_claimed_for_the_watchdog_before_ray_starts(monkeypatch, tmp_path):
+    """The watchdog finds what a killed driver's Ray instance left by its directory; a directory named only after
+    ``ray.init`` returns misses a worker started in between (the raylet ends with the driver, its children with no one)."""
+    ray = pytest.importorskip("ray", reason="Ray is not installed (pip install sb3-aac[distributed])")
+    from benchmarks import engines
+
+    events: list[tuple[str, str | None]] = []
+
+    class RecordingReaper:
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc_info):
+            events.append(("exit", None))
+
+        def claim(self, directory):
+            events.append(("claim", directory))
+
+    monkeypatch.setattr(engines, "ProcessReaper", RecordingReaper)
+    monkeypatch.setattr(ray, "is_initialized", lambda: False)
+    monkeypatch.setattr(ray, "init", lambda **kwargs: events.append(("init", kwargs.get("_temp_dir"))))
+    monkeypatch.setattr(ray, "shutdown", lambda: events.append(("shutdown", None)))
+    monkeypatch.setenv("RAY_TMPDIR", str(tmp_path))
+    with RayEngine(num_cpus=1).connected():
+        events.append(("inside", None))
+    assert [name for name, _ in events] == ["claim", "init", "inside", "shutdown", "exit"]
+    claimed, started_in = events[0][1], events[1][1]
+    assert claimed == started_in and claimed is not None and Path(claimed).parent == tmp_path and Path(claimed).is_dir()
