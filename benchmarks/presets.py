@@ -337,13 +337,12 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 #   whose tuned twin is the headline row, with PAPER_SEEDS).
 # * ``tuned``: the learners with a tuning study (benchmarks.tuning: FULL_TUNING's size, ``tune_steps`` env steps a
 #   trial) and a tuned twin with HEADLINE_SEEDS: SarsaAAC's TilePolicy and DeepPolicy everywhere (their defaults
-#   were chosen on a few of our tasks), PPO and HybridPPO on the dribbling envs, HybridPPO on Goal and Moving (their
-#   defaults are their libraries'), MP-DQN on the paper env, TD3 on both dribbling envs. Not tuned: MP-DQN on
-#   Platform and Goal, which runs the reference MP-DQN code's published settings (hyperparams/mpdqn.yml, tuned by its
-#   authors for those domains), TD3 on CatchPoint, PPO and HybridPPO on Platform and Sliding, and PPO on Moving, which
-#   run their documented defaults; their studies and tuned twins would cost about 2.4, 0.5 and 1.2 core-hours
-#   (``--estimate``) and more: TD3's v19 trials ran 13-623 s against its estimate's ~40, and PPO's on Moving up to 488 s
-#   (rl-zoo3's spaces reach settings many times slower than the defaults).
+#   were chosen on a few of our tasks), PPO and HybridPPO wherever their rows run (Goal has no PPO row; their
+#   defaults are their libraries'), MP-DQN on the paper env and Platform, TD3 on both dribbling envs.
+#   Not tuned: MP-DQN on Goal, which runs the reference MP-DQN code's published settings (hyperparams/mpdqn.yml,
+#   tuned by its authors for that domain), and TD3 on CatchPoint, which runs its documented defaults; their studies
+#   and tuned twins would cost about 1.6 and 0.5 core-hours (``--estimate``) and more: TD3's v19 trials ran 13-623 s
+#   against its estimate's ~40 (rl-zoo3's spaces reach settings many times slower than the defaults).
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners.
 #
@@ -438,7 +437,7 @@ FULL: dict[str, Any] = {
                 # MP-DQN: the reference settings; published 0.987
                 *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "MPDQN"),
             ],
-            _learners(*_SARSA_HEADLINE),
+            _learners(*_SARSA_HEADLINE, "MPDQN", *_ON_POLICY),
             10_000,
             **_EPISODIC_SIZES,
         ),
@@ -462,14 +461,14 @@ FULL: dict[str, Any] = {
         "Moving-v0": _env(
             100_000,
             _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO"),
-            _learners(*_SARSA_HEADLINE, "HybridPPO"),
+            _learners(*_SARSA_HEADLINE, *_ON_POLICY),
             50_000,
             **_EPISODIC_SIZES,
         ),
         "Sliding-v0": _env(
             100_000,
             _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO"),
-            _learners(*_SARSA_HEADLINE),
+            _learners(*_SARSA_HEADLINE, *_ON_POLICY),
             50_000,
             **_EPISODIC_SIZES,
         ),
