@@ -403,7 +403,7 @@ def _env(
 _EPISODIC_SIZES = {"eval_episodes": 50, "final_episodes": 500}
 _SARSA_HEADLINE = ("SarsaAAC-tile", "SarsaAAC-deep")  # tuned on every env
 _PAPER_HEADLINE = (*_SARSA_HEADLINE, "MPDQN", "TD3")
-_ON_POLICY = ("HybridPPO", "PPO")  # tuned on the dribbling envs (cheap there: 1,000-8,000 env steps/s)
+_ON_POLICY = ("HybridPPO", "PPO")  # tuned on the dribbling envs (cheap there: 1,000-8,000 env steps/s) and Sliding
 FULL: dict[str, Any] = {
     "envs": {
         "RoboCupDribblePaper-v0": _env(
