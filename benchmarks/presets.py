@@ -326,7 +326,7 @@ HEADLINE_SEEDS = tuple(range(10))  # a headline pair's learners: >= 10 seeds (be
 PAPER_SEEDS = tuple(range(5))  # the paper's configs, the long and the wall-clock budgets, and costly default rows
 FEW_SEEDS = tuple(range(3))  # every other learner
 
-# full: the regeneration, sized to about 14 core-hours on the development machine (17.5 measured by 2026-12-07;
+# full: the regeneration, sized to about 19 core-hours on the development machine (17.5 measured by 2026-12-07;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 110-600 env steps/s on
 # one core (MP-DQN 4 ms a step, TD3 1.8), many times slower than SarsaAAC (the report's "Training cost" line), so 10
@@ -336,15 +336,17 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 #   recommended policy is chosen by tests on 10 seeds), the others with FEW_SEEDS (the costly defaults of a learner
 #   whose tuned twin is the headline row, with PAPER_SEEDS).
 # * ``tuned``: the learners with a tuning study (benchmarks.tuning: FULL_TUNING's size, ``tune_steps`` env steps a
-#   trial) and a tuned twin with HEADLINE_SEEDS: SarsaAAC's TilePolicy and DeepPolicy everywhere (their defaults
-#   were chosen on a few of our tasks), HybridPPO wherever its rows run and PPO on the dribbling envs and Sliding
-#   (their defaults are their libraries'), MP-DQN on the paper env, Platform and Goal (its rows without a study run
-#   the reference MP-DQN code's published settings), TD3 on both dribbling envs. Not tuned: TD3 on CatchPoint and
-#   PPO on Platform and Moving, which run their documented defaults; their studies and tuned twins would cost about
-#   0.5 and 0.6 core-hours (``--estimate``) and more: rl-zoo3's spaces reach settings many times slower than the
-#   defaults (TD3's v19 trials ran 13-623 s against its estimate's ~40, PPO's Sliding trials 41-319 s).
+#   trial) and a tuned twin with HEADLINE_SEEDS: SarsaAAC's TilePolicy and DeepPolicy everywhere but on HFO (their
+#   defaults were chosen on a few of our tasks), HybridPPO wherever its rows run but on HFO and PPO on the dribbling
+#   envs, Platform and Sliding (their defaults are their libraries'), MP-DQN on the paper env, Platform and Goal (its
+#   rows without a study run the reference MP-DQN code's published settings), TD3 on both dribbling envs. Not tuned:
+#   TD3 on CatchPoint and PPO on Moving, which run their documented defaults (their studies and tuned twins would cost
+#   about 0.5 and 0.4 core-hours by ``--estimate``, and more: rl-zoo3's spaces reach settings many times slower than
+#   the defaults; TD3's v19 trials ran 13-623 s against its estimate's ~40, PPO's Sliding trials 41-319 s), and
+#   nothing on HFO, where a study of 20 trials of HFO_BUDGET // 2 env steps and a tuned twin of 10 seeds cost about
+#   2 core-hours a learner.
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
-#   equal seconds for the paper env's headline learners.
+#   equal seconds for the paper env's headline learners and HFO's torch learners.
 #
 # Sliding-v0 (Moving's variant with inertia, no published figure) runs as Moving-v0 does. Budgets: 50k env steps on
 # dribbling (~3,500 SarsaAAC episodes), 20k on Platform; Goal-v0 60k (the reference MP-DQN code's ~20,000 episodes,
@@ -403,7 +405,20 @@ def _env(
 _EPISODIC_SIZES = {"eval_episodes": 50, "final_episodes": 500}
 _SARSA_HEADLINE = ("SarsaAAC-tile", "SarsaAAC-deep")  # tuned on every env
 _PAPER_HEADLINE = (*_SARSA_HEADLINE, "MPDQN", "TD3")
-_ON_POLICY = ("HybridPPO", "PPO")  # tuned on the dribbling envs (cheap there: 1,000-8,000 env steps/s) and Sliding
+_ON_POLICY = ("HybridPPO", "PPO")  # tuned on dribbling (1,000-8,000 env steps/s there), Platform and Sliding
+# Half Field Offense 1v0 (docs/half_field_offense.md): SarsaAAC's DeepPolicy (TilePolicy's tiles over 59 inputs learn
+# too slowly there) against the hybrid peer and the best SB3 baseline at HFO_BUDGET env steps (~15,000 trials; ~90 s
+# of DeepPolicy's training on one core, 7-8 minutes of HybridPPO's or PPO's), and every torch learner given
+# HFO_SECONDS of training, the wall-clock view of "within 10 minutes of one core" at the size one machine affords
+# (their env-step horizon is what they step in those seconds: MP-DQN ~75k, 2-4 % of its published 20,000 episodes).
+# The peers run their constructor defaults (no hyperparams entry for HFO); nothing is tuned there (see ``tuned``).
+HFO_BUDGET = 1_500_000
+HFO_SECONDS = 300
+_HFO_VIEWS: dict[str, Any] = {
+    "wall_clock": {"seconds": HFO_SECONDS, "runs": _runs(PAPER_SEEDS, "MPDQN", "PDQN", "HybridPPO", "PPO", "TD3")},
+    "eval_every": 2500,
+    "eval_episodes": 50,
+}
 FULL: dict[str, Any] = {
     "envs": {
         "RoboCupDribblePaper-v0": _env(
@@ -437,7 +452,7 @@ FULL: dict[str, Any] = {
                 # MP-DQN: the reference settings; published 0.987
                 *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "MPDQN"),
             ],
-            _learners(*_SARSA_HEADLINE, "MPDQN", "HybridPPO"),
+            _learners(*_SARSA_HEADLINE, "MPDQN", *_ON_POLICY),
             10_000,
             **_EPISODIC_SIZES,
         ),
@@ -471,6 +486,13 @@ FULL: dict[str, Any] = {
             _learners(*_SARSA_HEADLINE, *_ON_POLICY),
             50_000,
             **_EPISODIC_SIZES,
+        ),
+        HFO_ID: _env(
+            HFO_BUDGET,
+            [*_runs(HEADLINE_SEEDS, "SarsaAAC-deep", "HybridPPO"), *_runs(PAPER_SEEDS, "PPO")],
+            [],
+            HFO_BUDGET // 2,
+            **_HFO_VIEWS,
         ),
     },
     "tuning": FULL_TUNING,
@@ -511,22 +533,10 @@ HPPO_STUDY: dict[str, Any] = {
     "final_episodes": 1000,
 }
 
-# Half Field Offense 1v0 (docs/half_field_offense.md): SarsaAAC's DeepPolicy (TilePolicy's tiles over 59 inputs learn
-# too slowly there) at 1.5M env steps (~15,000 trials, ~90 s of training on one core), and the torch learners and
-# baselines given HFO_SECONDS of training each, the wall-clock view of "within 10 minutes of one core" at the size one
-# machine affords (their env-step horizon is what they step in those seconds: MP-DQN ~75k, 2-4 % of its published
-# 20,000 episodes). The peers run their constructor defaults (no hyperparams entry for HFO), on 5 seeds each.
-HFO_SECONDS = 300
+# Half Field Offense 1v0 alone (the full preset's HFO entry at 5 seeds and without the 1.5M-step peers): about 2.7
+# core-hours, 80 minutes on two cores.
 HFO_STUDY: dict[str, Any] = {
-    "envs": {
-        HFO_ID: {
-            "budget": 1_500_000,
-            "runs": _runs(PAPER_SEEDS, "SarsaAAC-deep"),
-            "wall_clock": {"seconds": HFO_SECONDS, "runs": _runs(PAPER_SEEDS, "MPDQN", "PDQN", "HybridPPO", "PPO", "TD3")},
-            "eval_every": 2500,
-            "eval_episodes": 50,
-        },
-    },
+    "envs": {HFO_ID: {"budget": HFO_BUDGET, "runs": _runs(PAPER_SEEDS, "SarsaAAC-deep"), **_HFO_VIEWS}},
     "eval_every": 500,
     "eval_episodes": 100,
     "final_episodes": 1000,
