@@ -83,8 +83,8 @@ def build_report(out: str | Path, figures: bool = True) -> Path:
 
     shown_dir = out.name if out.is_absolute() else out  # no path of the machine that made it
     lines = [
-        "# Benchmark: SarsaAAC against P-DQN, MP-DQN, HybridPPO and SB3 baselines on RoboCup dribbling, Platform and the "
-        "hybrid-action domains",
+        "# Benchmark: SarsaAAC against P-DQN, MP-DQN, HybridPPO and SB3 baselines on RoboCup dribbling, Platform, the "
+        "hybrid-action domains and Half Field Offense",
         "",
         f"Generated {time.strftime('%Y-%m-%d %H:%M')} from {len(results)} cell files in `{shown_dir}`.",
         "",
