@@ -326,7 +326,7 @@ HEADLINE_SEEDS = tuple(range(10))  # a headline pair's learners: >= 10 seeds (be
 PAPER_SEEDS = tuple(range(5))  # the paper's configs, the long and the wall-clock budgets, and costly default rows
 FEW_SEEDS = tuple(range(3))  # every other learner
 
-# full: the regeneration, sized to about 19 core-hours on the development machine (17.5 measured by 2026-12-07;
+# full: the regeneration, sized to about 19 core-hours on the development machine (22.1 measured by 2026-12-07;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 110-600 env steps/s on
 # one core (MP-DQN 4 ms a step, TD3 1.8), many times slower than SarsaAAC (the report's "Training cost" line), so 10
@@ -408,9 +408,9 @@ _PAPER_HEADLINE = (*_SARSA_HEADLINE, "MPDQN", "TD3")
 _ON_POLICY = ("HybridPPO", "PPO")  # tuned on dribbling (1,000-8,000 env steps/s there), Platform and Sliding
 # Half Field Offense 1v0 (docs/half_field_offense.md): SarsaAAC's DeepPolicy (TilePolicy's tiles over 59 inputs learn
 # too slowly there) against the hybrid peer and the best SB3 baseline at HFO_BUDGET env steps (~15,000 trials; ~90 s
-# of DeepPolicy's training on one core, 7-8 minutes of HybridPPO's or PPO's), and every torch learner given
+# of DeepPolicy's training on one core, about 5.5 minutes of HybridPPO's or PPO's), and every torch learner given
 # HFO_SECONDS of training, the wall-clock view of "within 10 minutes of one core" at the size one machine affords
-# (their env-step horizon is what they step in those seconds: MP-DQN ~75k, 2-4 % of its published 20,000 episodes).
+# (in those seconds MP-DQN stepped ~120k env steps, ~1,200 trials: 6 % of the 20,000 episodes of its published figure).
 # The peers run their constructor defaults (no hyperparams entry for HFO); nothing is tuned there (see ``tuned``).
 HFO_BUDGET = 1_500_000
 HFO_SECONDS = 300
