@@ -489,7 +489,7 @@ FULL: dict[str, Any] = {
         ),
         HFO_ID: _env(
             HFO_BUDGET,
-            [*_runs(HEADLINE_SEEDS, "SarsaAAC-deep", "HybridPPO"), *_runs(PAPER_SEEDS, "PPO")],
+            _runs(HEADLINE_SEEDS, "SarsaAAC-deep", "HybridPPO", "PPO"),
             [],
             HFO_BUDGET // 2,
             **_HFO_VIEWS,
