@@ -326,7 +326,7 @@ HEADLINE_SEEDS = tuple(range(10))  # a headline pair's learners: >= 10 seeds (be
 PAPER_SEEDS = tuple(range(5))  # the paper's configs, the long and the wall-clock budgets, and costly default rows
 FEW_SEEDS = tuple(range(3))  # every other learner
 
-# full: the regeneration, sized to about 19 core-hours on the development machine (22.1 measured by 2026-12-07;
+# full: the regeneration, sized to about 19 core-hours on the development machine (22.6 measured by 2026-12-07;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 110-600 env steps/s on
 # one core (MP-DQN 4 ms a step, TD3 1.8), many times slower than SarsaAAC (the report's "Training cost" line), so 10
@@ -533,8 +533,8 @@ HPPO_STUDY: dict[str, Any] = {
     "final_episodes": 1000,
 }
 
-# Half Field Offense 1v0 alone (the full preset's HFO entry at 5 seeds and without the 1.5M-step peers): about 2.7
-# core-hours, 80 minutes on two cores.
+# Half Field Offense 1v0 alone: the full preset's HFO entry at 5 seeds, without the 1.5M-step peers (its cost:
+# ``python -m benchmarks.run --preset hfo --estimate``).
 HFO_STUDY: dict[str, Any] = {
     "envs": {HFO_ID: {"budget": HFO_BUDGET, "runs": _runs(PAPER_SEEDS, "SarsaAAC-deep"), **_HFO_VIEWS}},
     "eval_every": 500,
