@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
 
 import numpy as np
 import pytest
@@ -11,7 +10,7 @@ from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_aac import SarsaAAC
 from sb3_aac.common.envs import NavigationEnv, ParameterizedTargetEnv
-from sb3_aac.sarsa_aac.deep import LANE_CHUNK, DeepBank, DeepKernel, sparse_uniform
+from sb3_aac.sarsa_aac.deep import DeepBank, sparse_uniform
 
 
 def success_rate(model: SarsaAAC, episodes: int = 200) -> float:
@@ -181,41 +180,3 @@ def test_bad_policy_settings(kwargs: dict, message: str) -> None:
 def test_bad_trace_setting() -> None:
     with pytest.raises(ValueError, match=r"trace_lambda must be in \[0, 1\]"):
         SarsaAAC("DeepPolicy", ParameterizedTargetEnv(), trace_lambda=1.5)
-
-
-@pytest.mark.parametrize("trace_lambda", [0.0, 0.8])
-def test_lanes_beyond_a_chunk_are_updated_chunk_after_chunk(trace_lambda: float, monkeypatch: pytest.MonkeyPatch) -> None:
-    """
-    With more than LANE_CHUNK lanes, each chunk's errors are measured on the weights the earlier chunks' steps left:
-    one forward pass per chunk (its s and s' rows), each after the previous chunk's update.
-    """
-    n = 2 * LANE_CHUNK + 3
-    model = SarsaAAC("DeepPolicy", make_vec_env(NavigationEnv, n_envs=n, seed=0), seed=0, trace_lambda=trace_lambda)
-    model.learn(5 * n)  # past the first steps (the return scale is set)
-    calls = forward_calls(monkeypatch, model)
-    model.learn(n, reset_num_timesteps=False)
-    assert [rows for rows, _ in calls] == [2 * LANE_CHUNK, 2 * LANE_CHUNK, 2 * 3]
-    weights = [w for _, w in calls] + [model.policy.parameters_to_vector()]
-    assert all(not np.array_equal(before, after) for before, after in itertools.pairwise(weights))
-
-
-def test_a_chunk_of_lanes_is_one_forward_pass(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Up to LANE_CHUNK lanes are updated together: one forward pass of s and s' per env step."""
-    model = SarsaAAC("DeepPolicy", make_vec_env(NavigationEnv, n_envs=LANE_CHUNK, seed=0), seed=0)
-    model.learn(2 * LANE_CHUNK)
-    calls = forward_calls(monkeypatch, model)
-    model.learn(LANE_CHUNK, reset_num_timesteps=False)
-    assert [rows for rows, _ in calls] == [2 * LANE_CHUNK]
-
-
-def forward_calls(monkeypatch: pytest.MonkeyPatch, model: SarsaAAC) -> list[tuple[int, np.ndarray]]:
-    """From now on, every training forward pass's number of rows and the policy's weights when it ran."""
-    calls: list[tuple[int, np.ndarray]] = []
-    forward = DeepKernel.forward
-
-    def spy(kernel: DeepKernel, obs: np.ndarray) -> tuple[np.ndarray, object]:
-        calls.append((len(obs), model.policy.parameters_to_vector()))
-        return forward(kernel, obs)
-
-    monkeypatch.setattr(DeepKernel, "forward", spy)
-    return calls

@@ -104,6 +104,8 @@ def test_critic_follows_the_mean_where_cacla_follows_the_majority(parameter_upda
         RiskyBandit(),
         policy_kwargs=dict(hidden_units=None),
         learning_rate=0.02,  # the critics average over about 50 samples
+        q_learning_rate=0.1,
+        param_learning_rate=0.1,  # the actor moves faster than the critics average
         parameter_update=parameter_update,
         replay_ratio=0,  # the two update rules alone
         seed=0,

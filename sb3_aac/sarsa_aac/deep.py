@@ -28,15 +28,15 @@ output layers are read as ``weight / u``, so ObGD's bound and every step are the
 Lanes (a VecEnv of ``n`` lanes): each lane has its own trace, and each lane's sample takes the ObGD step it would take
 alone at the current weights, so the per-sample step does not depend on ``n``; with one lane this is stream ObGD
 exactly. The lanes' steps are added (as ``n`` steps taken one after another would be, to first order in the step);
-where that sum would carry the batch past the minimum of its squared errors along the summed step's direction (to
-first order: ``t* = sum_i delta_i c_i / sum_i c_i**2 < 1``, ``c_i`` the change of sample ``i``'s output), it is
-shortened to ``t*`` (one factor per network and step). So steps of similar samples cannot overshoot together, while
-samples that pull apart keep their own steps. At most :data:`LANE_CHUNK` lanes are summed so: more lanes are updated
-in chunks of that many, one chunk after another, each chunk's errors measured on the weights the earlier chunks left
-(one summed step for 256 similar lanes would shrink to about one sample's step). What does not hold: within a chunk
-the TD errors are all measured before any of its steps, so the curve per env step is the same only to first order;
-measured on the navigation env (seed 0), 1 and 16 lanes both solve it after 30k env steps (0.995 and 0.970
-success), but 16 lanes lag early (0.305 against 0.675 after 8k).
+where that sum would carry the batch past the minimum of its squared errors along the summed step's direction (to first
+order: ``t* = sum_i delta_i c_i / sum_i c_i**2 < 1``, ``c_i`` the change of sample ``i``'s output), it is shortened to
+``t*`` (one factor per network and step). So steps of similar samples cannot overshoot together, while samples that
+pull apart keep their own steps. At most :data:`~sb3_aac.sarsa_aac.lane_steps.LANE_CHUNK` lanes are summed so: more
+lanes are updated in chunks of that many, one chunk after another, each chunk's errors measured on the weights the
+earlier chunks left (one summed step for 256 similar lanes would shrink to about one sample's step). What does not
+hold: within a chunk the TD errors are all measured before any of its steps, so the curve per env step is the same only
+to first order; measured on the navigation env (seed 0), 1 and 16 lanes both solve it after 30k env steps (0.995 and
+0.970 success), but 16 lanes lag early (0.305 against 0.675 after 8k).
 
 The parameters are float64 torch tensors (for SB3's save/load); the forward pass is
 :class:`sb3_aac.runtime.forward.NetworkForward` (the exported runtime's code) and :class:`DeepKernel` adds the
@@ -61,9 +61,6 @@ from sb3_aac.runtime.forward import NetworkForward
 LAYER_NORM_EPS = 1e-5
 LEAKY_SLOPE = 0.01
 DEFAULT_SPARSITY = 0.9
-# The most lanes whose steps are summed on the same weights (module docstring, "Lanes"): SarsaAAC updates more lanes
-# in chunks of this many, one chunk after another, each on the weights the earlier chunks left.
-LANE_CHUNK = 16
 # Added to the observations' running variance before its square root (Elsayed et al. 2024 use 1e-8).
 OBS_VARIANCE_EPS = 1e-8
 MAX_HIDDEN_UNITS = 4096

@@ -24,6 +24,12 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+# The most lanes whose errors are measured on the same weights where every weight moves with every sample (DeepPolicy,
+# whose steps of a chunk are summed, see sb3_aac.sarsa_aac.deep; the MLP heads): SarsaAAC updates more lanes in
+# chunks of this many, one chunk after another, each chunk's targets, CACLA gates and next actions computed on the
+# weights the earlier chunks left. Linear heads (tiles, RBFs) take all lanes at once.
+LANE_CHUNK = 16
+
 
 @numba.njit(cache=True, nogil=True)
 def linear_steps(w, b, x, err, lr):  # type: ignore[no-untyped-def]

@@ -112,6 +112,13 @@ class SarsaAACPolicy(BasePolicy):
     def finite_outputs(self) -> np.ndarray:
         """``(A,)`` bool: for each output, whether every weight it depends on is finite."""
 
+    @property
+    def has_hidden_layers(self) -> bool:
+        """Whether the approximators have hidden layers, whose every weight moves with every sample: SarsaAAC then
+        measures at most :data:`~sb3_aac.sarsa_aac.lane_steps.LANE_CHUNK` lanes' errors on the same weights. False
+        here (linear heads over fixed features)."""
+        return False
+
     # ------------------------------------------------------------------ built on the contract
 
     def scale_value_outputs(self, factor: float) -> None:
@@ -241,6 +248,10 @@ class DenseBankPolicy(NumpyBankPolicy):
             )
         )
 
+    @property
+    def has_hidden_layers(self) -> bool:
+        return self.hidden_units is not None
+
     def _get_constructor_parameters(self) -> dict[str, Any]:
         # Not super()'s: it adds normalize_images, which these policies do not take.
         return dict(
@@ -262,6 +273,9 @@ class MlpPolicy(DenseBankPolicy):
     are :class:`DenseBankPolicy`'s.
     """
 
+    # Half the other families' step: at 0.1 one lane and 256 lanes dribbled 4.6 m apart after 150k env steps, at 0.05
+    # 0.7 m, each lane count further (docs/sarsa_aac_results.md, "Lane count and the plateau").
+    default_learning_rate: ClassVar[float] = 0.05
     default_replay_ratio: ClassVar[int] = 2
 
     def __init__(
@@ -415,6 +429,10 @@ class DeepPolicy(NumpyBankPolicy):
         self._set_approximators(
             DeepBank(low, high, self.n_types, self.n_params, self.net_arch, sparsity, self.normalize_obs, kappa)
         )
+
+    @property
+    def has_hidden_layers(self) -> bool:
+        return True  # even with net_arch=[]: a chunk's steps are summed (sb3_aac.sarsa_aac.deep, "Lanes")
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
         return dict(

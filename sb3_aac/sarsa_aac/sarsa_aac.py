@@ -16,9 +16,10 @@ from sb3_aac.common.hyperparameters import check_counts, check_finite, check_fra
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
-from sb3_aac.sarsa_aac.deep import LANE_CHUNK, DeepKernel, DeepTraces
+from sb3_aac.sarsa_aac.deep import DeepKernel, DeepTraces
 from sb3_aac.sarsa_aac.exploration import TYPE_EXPLORATIONS, select_types
 from sb3_aac.sarsa_aac.kernels import Kernel
+from sb3_aac.sarsa_aac.lane_steps import LANE_CHUNK
 from sb3_aac.sarsa_aac.monitoring import TRAIN_STAT_FIELDS, TrainingMonitor
 from sb3_aac.sarsa_aac.parameter_critic import ParameterCritic, check_parameter_update
 from sb3_aac.sarsa_aac.replay import RecentTransitions, Transitions
@@ -76,9 +77,10 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
     rate of 1 moves a linear approximator's output onto its target, and the lanes' samples of one env step are
     applied one after another, each error recomputed on the weights the earlier lanes left
     (:mod:`sb3_aac.sarsa_aac.lane_steps`). So ``n`` lanes take the steps one lane would take on their ``n`` samples
-    (the targets bootstrapped from the weights at the start of the env step): a rate means the same per sample
-    whatever the number of lanes, so the learning curve per env step changes with the lane count only through the
-    order and the correlation of the samples (measured in ``docs/sarsa_aac_results.md``). Rates are validated to lie in
+    (the targets bootstrapped from the weights at the start of the env step, or with hidden layers at the start of
+    the sample's chunk of at most :data:`~sb3_aac.sarsa_aac.lane_steps.LANE_CHUNK` lanes): a rate means the same per
+    sample whatever the number of lanes, so the learning curve per env step changes with the lane count only through
+    the order and the correlation of the samples (measured in ``docs/sarsa_aac_results.md``). Rates are validated to lie in
     ``[0, 1]``; 0 freezes an approximator (as rl-zoo3's ``enjoy`` loads a model only to act, with
     ``custom_objects={"learning_rate": 0.0}``).
 
@@ -109,8 +111,8 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
     :param env: The environment to learn from (if registered in Gym, can be str)
     :param learning_rate: Critic learning rate (normalised, in ``[0, 1]``), or a schedule of the progress
         remaining (from 1 to 0) whose values at 1 and 0 are in ``[0, 1]``; None (the default) takes the policy's
-        ``default_learning_rate`` (0.1 per sample for the linear and MLP families, 0.5 for DeepPolicy's ObGD step),
-        as do the other two rates
+        ``default_learning_rate`` (0.1 per sample for the tiles, RBFs and RbfMlpPolicy, 0.05 for MlpPolicy, 0.5 for
+        DeepPolicy's ObGD step), as do the other two rates
     :param q_learning_rate: Action-type actor learning rate, or a schedule
     :param param_learning_rate: Parameter actor learning rate, or a schedule
     :param gamma: The discount factor
@@ -486,8 +488,9 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
         self, new_obs: np.ndarray, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]], any_done: bool
     ) -> None:
         """
-        One SARSA-AAC update of every approximator for all envs, then choose the next action. A deep policy's lanes
-        are updated in chunks of at most :data:`~sb3_aac.sarsa_aac.deep.LANE_CHUNK`, one after another.
+        One SARSA-AAC update of every approximator for all envs, then choose the next action. The lanes of a policy
+        with hidden layers (DeepPolicy, the MLP heads) are updated in chunks of at most
+        :data:`~sb3_aac.sarsa_aac.lane_steps.LANE_CHUNK`, one after another.
         """
         obs, k, params = self._pending  # type: ignore[misc]
         n = len(k)
@@ -504,7 +507,7 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
         # Before the forward pass: it may put the weights into return units, and s' normalised with itself.
         self._track_return_scale(rewards, dones)
         self._observe(next_obs)
-        chunk = LANE_CHUNK if isinstance(self._kernel, DeepKernel) else n
+        chunk = LANE_CHUNK if self.policy.has_hidden_layers else n
         parts = [
             self._update_lanes(slice(start, start + chunk), obs, k, params, rewards, next_obs, discount, terminal_obs)
             for start in range(0, n, chunk)
@@ -553,7 +556,7 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
         truncated = [i - start for i in terminal_obs if start <= i < start + n]
         traces = self._traces
         if traces is not None and n < self.n_envs:
-            assert isinstance(traces, DeepTraces)  # only a deep policy's lanes are split (LANE_CHUNK)
+            assert isinstance(traces, DeepTraces)  # lanes are split only where there are hidden layers: no tile traces
             traces = traces.lanes(lanes)
         batch = np.concatenate((obs, next_obs, *[terminal_obs[start + i][None] for i in truncated]))
         # One forward pass for s (weights as they are now), s' and the terminal observations.
