@@ -448,8 +448,8 @@ FULL: dict[str, Any] = {
         PLATFORM_ID: _env(
             20_000,
             [
-                # MP-DQN: the reference settings; published 0.987
-                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "MPDQN"),
+                # MP-DQN and P-DQN: the reference settings; published 0.987 and 0.93. TD3: its defaults
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "MPDQN", "PDQN", "TD3"),
             ],
             _learners(*_SARSA_HEADLINE, "MPDQN", *_ON_POLICY),
             10_000,
