@@ -62,10 +62,14 @@ RELIABILITY_SEED = 30_000  # the reliability test (10,000 fresh players, one epi
 
 SARSA_N_ENVS = 16  # lanes for SarsaAAC (the quick start's setting)
 
-# The paper's update for its configurations: without the replay the MLP families take by default (SarsaAAC's
-# replay_ratio) and at the per-sample rate of 0.1 their figures were measured with (MlpPolicy's default is 0.05), so
-# that they reproduce the paper's figures.
-PAPER_UPDATE: dict[str, Any] = {"replay_ratio": 0, "learning_rate": 0.1, "q_learning_rate": 0.1, "param_learning_rate": 0.1}
+# The paper's update for its configurations, so that they reproduce the paper's figures: without the replay the MLP
+# families take by default (SarsaAAC's replay_ratio), and every rate at PAPER_RATE, the per-sample rate their figures
+# were measured with (MlpPolicy's default is 0.05).
+PAPER_RATE = 0.1
+PAPER_UPDATE: dict[str, Any] = {
+    "replay_ratio": 0,
+    **dict.fromkeys(("learning_rate", "q_learning_rate", "param_learning_rate"), PAPER_RATE),
+}
 # name: (family, policy, policy_kwargs, SarsaAAC keyword arguments beyond its defaults)
 SARSA_CONFIGS: dict[str, tuple[str, str, dict[str, Any], dict[str, Any]]] = {
     "tile": ("Tiles", "TilePolicy", {}, {}),

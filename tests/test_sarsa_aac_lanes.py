@@ -66,7 +66,7 @@ def test_lanes_beyond_a_chunk_are_updated_chunk_after_chunk(policy: str, kwargs:
     """
     n = 2 * LANE_CHUNK + 3
     model = lane_model(policy, n, **kwargs)
-    assert model.policy.has_hidden_layers
+    assert model.policy.chunks_lanes
     model.learn(5 * n)  # past the first steps (the return scale is set)
     calls = forward_calls(monkeypatch, model)
     model.learn(n, reset_num_timesteps=False)
@@ -82,7 +82,7 @@ def test_a_chunk_of_lanes_or_linear_heads_take_one_forward_pass(policy: str, n_e
     """Up to LANE_CHUNK lanes, and any number of lanes of linear heads, are updated together: one forward pass of s
     and s' per env step."""
     model = lane_model(policy, n_envs)
-    assert model.policy.has_hidden_layers == (policy in ("DeepPolicy", "MlpPolicy"))
+    assert model.policy.chunks_lanes == (policy in ("DeepPolicy", "MlpPolicy"))
     model.learn(2 * n_envs)
     calls = forward_calls(monkeypatch, model)
     model.learn(n_envs, reset_num_timesteps=False)

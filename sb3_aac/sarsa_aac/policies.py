@@ -113,10 +113,11 @@ class SarsaAACPolicy(BasePolicy):
         """``(A,)`` bool: for each output, whether every weight it depends on is finite."""
 
     @property
-    def has_hidden_layers(self) -> bool:
-        """Whether the approximators have hidden layers, whose every weight moves with every sample: SarsaAAC then
-        measures at most :data:`~sb3_aac.sarsa_aac.lane_steps.LANE_CHUNK` lanes' errors on the same weights. False
-        here (linear heads over fixed features)."""
+    def chunks_lanes(self) -> bool:
+        """Whether SarsaAAC updates this policy's lanes in chunks of at most
+        :data:`~sb3_aac.sarsa_aac.lane_steps.LANE_CHUNK`, each chunk's errors measured on the weights the earlier
+        chunks left: where every weight moves with every sample (hidden layers). False here (linear heads over fixed
+        features take all lanes at once)."""
         return False
 
     # ------------------------------------------------------------------ built on the contract
@@ -249,7 +250,7 @@ class DenseBankPolicy(NumpyBankPolicy):
         )
 
     @property
-    def has_hidden_layers(self) -> bool:
+    def chunks_lanes(self) -> bool:
         return self.hidden_units is not None
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
@@ -273,9 +274,8 @@ class MlpPolicy(DenseBankPolicy):
     are :class:`DenseBankPolicy`'s.
     """
 
-    # Half the other families' step: after 150k env steps on the paper env it dribbles further than 0.1 on 1, 16 and
-    # 256 lanes (22.9, 22.8, 21.0 m against 21.5, 18.6, 16.9), and with the lanes in chunks its 1, 16 and 256 lanes
-    # end within 0.6 m of each other (docs/sarsa_aac_results.md, "Lane count and the plateau").
+    # Half the other families' step: better than 0.1 on the paper env on 1, 16 and 256 lanes, which with the lanes in
+    # chunks end within 1 m of each other (docs/sarsa_aac_results.md, "Lane count and the plateau", has the figures).
     default_learning_rate: ClassVar[float] = 0.05
     default_replay_ratio: ClassVar[int] = 2
 
@@ -432,7 +432,7 @@ class DeepPolicy(NumpyBankPolicy):
         )
 
     @property
-    def has_hidden_layers(self) -> bool:
+    def chunks_lanes(self) -> bool:
         return True  # even with net_arch=[]: a chunk's steps are summed (sb3_aac.sarsa_aac.deep, "Lanes")
 
     def _get_constructor_parameters(self) -> dict[str, Any]:

@@ -507,7 +507,7 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
         # Before the forward pass: it may put the weights into return units, and s' normalised with itself.
         self._track_return_scale(rewards, dones)
         self._observe(next_obs)
-        chunk = LANE_CHUNK if self.policy.has_hidden_layers else n
+        chunk = LANE_CHUNK if self.policy.chunks_lanes else n
         parts = [
             self._update_lanes(slice(start, start + chunk), obs, k, params, rewards, next_obs, discount, terminal_obs)
             for start in range(0, n, chunk)
