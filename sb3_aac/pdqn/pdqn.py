@@ -429,16 +429,15 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
             policy.q_optimizer.step()
 
             params = policy.actor(features)
+            actor_loss = -policy.q_net(features, params).sum(1).mean()
             if invert:
-                leaf = params.detach().requires_grad_()
-                q_sum = policy.q_net(features, leaf).sum(1).mean()
-                (ascent,) = th.autograd.grad(q_sum, leaf)
-                actor_loss = -q_sum.detach()
-                surrogate = -(invert_gradients(ascent, leaf.detach()) * params).sum()
-            else:
-                actor_loss = surrogate = -policy.q_net(features, params).sum(1).mean()
+                # One backward pass: the hook turns -dQ/dx, on its way into the actor, into the inverted descent
+                # direction (negations are exact, so the same bits as inverting a separately computed dQ/dx).
+                bound = params.detach()
+                params.register_hook(lambda descent: -invert_gradients(-descent, bound))
             # The actor's gradients only: the Q network's are not needed (the next Q step replaces them).
-            actor_grads = th.autograd.grad(surrogate, actor_params)
+            actor_grads = th.autograd.grad(actor_loss, actor_params)
+            actor_loss = actor_loss.detach()
             clip_grad_norm(actor_grads, self.max_grad_norm)
             set_grads(actor_params, actor_grads)
             policy.actor_optimizer.step()

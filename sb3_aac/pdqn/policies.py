@@ -57,8 +57,9 @@ class QNetwork(nn.Module):
             return run_layers(self.net, th.cat((features, params), dim=1))
         n, k = len(features), self.n_types
         # Pass j: features and only type j's parameters; rows j*n .. (j+1)*n - 1.
-        masked = (params.unsqueeze(0) * self.owner_mask.unsqueeze(1)).reshape(k * n, -1)
-        q_all = run_layers(self.net, th.cat((features.repeat(k, 1), masked), dim=1)).reshape(k, n, k)
+        masked = params.unsqueeze(0) * self.owner_mask.unsqueeze(1)  # (K, n, n_params)
+        passes = th.cat((features.expand(k, n, -1), masked), dim=2).reshape(k * n, -1)
+        q_all = run_layers(self.net, passes).reshape(k, n, k)
         diagonal: th.Tensor = q_all.diagonal(dim1=0, dim2=2)  # (n, K): Q_j taken from pass j
         return diagonal
 
