@@ -463,8 +463,8 @@ FULL: dict[str, Any] = {
         "Goal-v0": _env(
             60_000,
             [
-                # MP-DQN: the reference settings; published P(goal) 0.789
-                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "MPDQN"),
+                # MP-DQN and P-DQN: the reference settings (MP-DQN published P(goal) 0.789)
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "MPDQN", "PDQN"),
             ],
             _learners(*_SARSA_HEADLINE, "HybridPPO", "MPDQN"),
             30_000,
