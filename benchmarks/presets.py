@@ -114,9 +114,15 @@ REPLAY_RATIO_ONE = {"train_freq": 1, "gradient_steps": OFF_POLICY_ENVS}
 # observations as the domain's evaluation env; on Goal the reference's reward scale of 1/50), and on the ids of
 # "reference_start" it starts its parameter actor at the reference MP-DQN code's function (benchmarks.models):
 # with the yml's constant start MP-DQN never scored on Goal (P(goal) 0.0 after 60k steps, 0.684 with the reference's;
-# docs/pdqn.md).
+# docs/pdqn.md), and P-DQN scored in one of 7 seeds (0.0-0.15; the reference's run_goal_pdqn.py starts both so).
 PEERS: dict[str, dict[str, Any]] = {
-    "PDQN": {"yml": "pdqn", "n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE), "fallback": None},
+    "PDQN": {
+        "yml": "pdqn",
+        "n_envs": OFF_POLICY_ENVS,
+        "kwargs": dict(REPLAY_RATIO_ONE),
+        "fallback": None,
+        "reference_start": ("Goal-v0",),
+    },
     "MPDQN": {
         "yml": "mpdqn",
         "n_envs": OFF_POLICY_ENVS,
