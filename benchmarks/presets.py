@@ -349,12 +349,13 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 # * ``tuned``: the learners with a tuning study (benchmarks.tuning: FULL_TUNING's size, ``tune_steps`` env steps a
 #   trial) and a tuned twin with HEADLINE_SEEDS: SarsaAAC's TilePolicy and DeepPolicy everywhere but on HFO (their
 #   defaults were chosen on a few of our tasks), HybridPPO and PPO wherever their rows run but on HFO (their defaults
-#   are their libraries'), MP-DQN on the paper env, Platform and Goal (its rows without a study run the reference
-#   MP-DQN code's published settings), P-DQN on Platform, TD3 on both dribbling envs. Not tuned: TD3 on CatchPoint and Platform, which
-#   run their documented defaults (studies that could not rank their trials: on CatchPoint the one tuning seed,
-#   TUNE_SEED, scores 0 with TD3's defaults after 5k-15k env steps where seed 0 scores 0.3, and the first five trials
-#   scored 0 at every evaluation; on Platform the first four trials scored 0.283 at every evaluation), and nothing on HFO, where a study of
-#   20 trials of HFO_BUDGET // 2 env steps and a tuned twin of 10 seeds cost about 2 core-hours a learner.
+#   are their libraries'), MP-DQN on the paper env, Platform and Goal and P-DQN on Platform and Goal (their rows without
+#   a study run the reference MP-DQN code's published settings), TD3 on both dribbling envs. Not tuned: TD3 on
+#   CatchPoint and Platform, which run their documented defaults (studies that could not rank their trials: on
+#   CatchPoint the one tuning seed, TUNE_SEED, scores 0 with TD3's defaults after 5k-15k env steps where seed 0 scores
+#   0.3, and the first five trials scored 0 at every evaluation; on Platform the first four trials scored 0.283 at every
+#   evaluation), and nothing on HFO, where a study of 20 trials of HFO_BUDGET // 2 env steps and a tuned twin of 10
+#   seeds cost about 2 core-hours a learner.
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners and HFO's torch learners.
 #
@@ -472,7 +473,7 @@ FULL: dict[str, Any] = {
                 # MP-DQN and P-DQN: the reference settings (MP-DQN published P(goal) 0.789)
                 *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "MPDQN", "PDQN"),
             ],
-            _learners(*_SARSA_HEADLINE, "HybridPPO", "MPDQN"),
+            _learners(*_SARSA_HEADLINE, "HybridPPO", "MPDQN", "PDQN"),
             30_000,
             **_EPISODIC_SIZES,
         ),
