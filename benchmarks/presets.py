@@ -114,9 +114,15 @@ REPLAY_RATIO_ONE = {"train_freq": 1, "gradient_steps": OFF_POLICY_ENVS}
 # observations as the domain's evaluation env; on Goal the reference's reward scale of 1/50), and on the ids of
 # "reference_start" it starts its parameter actor at the reference MP-DQN code's function (benchmarks.models):
 # with the yml's constant start MP-DQN never scored on Goal (P(goal) 0.0 after 60k steps, 0.684 with the reference's;
-# docs/pdqn.md).
+# docs/pdqn.md), and P-DQN scored in one of 7 seeds (0.0-0.15; the reference's run_goal_pdqn.py starts both so).
 PEERS: dict[str, dict[str, Any]] = {
-    "PDQN": {"yml": "pdqn", "n_envs": OFF_POLICY_ENVS, "kwargs": dict(REPLAY_RATIO_ONE), "fallback": None},
+    "PDQN": {
+        "yml": "pdqn",
+        "n_envs": OFF_POLICY_ENVS,
+        "kwargs": dict(REPLAY_RATIO_ONE),
+        "fallback": None,
+        "reference_start": ("Goal-v0",),
+    },
     "MPDQN": {
         "yml": "mpdqn",
         "n_envs": OFF_POLICY_ENVS,
@@ -343,12 +349,13 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 # * ``tuned``: the learners with a tuning study (benchmarks.tuning: FULL_TUNING's size, ``tune_steps`` env steps a
 #   trial) and a tuned twin with HEADLINE_SEEDS: SarsaAAC's TilePolicy and DeepPolicy everywhere but on HFO (their
 #   defaults were chosen on a few of our tasks), HybridPPO and PPO wherever their rows run but on HFO (their defaults
-#   are their libraries'), MP-DQN on the paper env, Platform and Goal (its rows without a study run the reference
-#   MP-DQN code's published settings), P-DQN on Platform, TD3 on both dribbling envs. Not tuned: TD3 on CatchPoint and Platform, which
-#   run their documented defaults (studies that could not rank their trials: on CatchPoint the one tuning seed,
-#   TUNE_SEED, scores 0 with TD3's defaults after 5k-15k env steps where seed 0 scores 0.3, and the first five trials
-#   scored 0 at every evaluation; on Platform the first four trials scored 0.283 at every evaluation), and nothing on HFO, where a study of
-#   20 trials of HFO_BUDGET // 2 env steps and a tuned twin of 10 seeds cost about 2 core-hours a learner.
+#   are their libraries'), MP-DQN on the paper env, Platform and Goal and P-DQN on Platform and Goal (their rows without
+#   a study run the reference MP-DQN code's published settings), TD3 on both dribbling envs. Not tuned: TD3 on
+#   CatchPoint and Platform, which run their documented defaults (studies that could not rank their trials: on
+#   CatchPoint the one tuning seed, TUNE_SEED, scores 0 with TD3's defaults after 5k-15k env steps where seed 0 scores
+#   0.3, and the first five trials scored 0 at every evaluation; on Platform the first four trials scored 0.283 at every
+#   evaluation), and nothing on HFO, where a study of 20 trials of HFO_BUDGET // 2 env steps and a tuned twin of 10
+#   seeds cost about 2 core-hours a learner.
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners and HFO's torch learners.
 #
@@ -463,10 +470,10 @@ FULL: dict[str, Any] = {
         "Goal-v0": _env(
             60_000,
             [
-                # MP-DQN: the reference settings; published P(goal) 0.789
-                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "MPDQN"),
+                # MP-DQN and P-DQN: the reference settings (MP-DQN published P(goal) 0.789)
+                *_runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "MPDQN", "PDQN"),
             ],
-            _learners(*_SARSA_HEADLINE, "HybridPPO", "MPDQN"),
+            _learners(*_SARSA_HEADLINE, "HybridPPO", "MPDQN", "PDQN"),
             30_000,
             **_EPISODIC_SIZES,
         ),
