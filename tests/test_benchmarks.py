@@ -547,20 +547,27 @@ def test_the_recommended_policy_is_the_one_the_committed_results_pick():
     assert CONFIG_LABELS[config] == f"{name} (recommended)"
 
 
-def test_the_peers_take_their_yml_entry_or_the_stated_fallback():
-    """MP-DQN on Goal: the reference settings, env (features, reward scale) and start; HybridPPO on Moving: hppo.yml's
-    Platform entry (the rule of all its entries) on the domain's env; MP-DQN on Moving: its defaults."""
+@pytest.mark.parametrize("algo", ["MPDQN", "PDQN"])
+def test_the_deep_q_peers_take_the_reference_settings_env_and_start_on_goal(algo):
     from benchmarks.models import build_model
     from benchmarks.models import PassthroughPolicy
     from hybrid_domains.reference_inputs import ScaleReward
 
-    goal, _, _ = build_model(Cell("Goal-v0", "MPDQN", "mpdqn", 0, 1000))
+    goal, _, _ = build_model(Cell("Goal-v0", algo, algo.lower(), 0, 1000))
     assert isinstance(goal.policy, PassthroughPolicy) and goal.gamma == 0.95 and goal.gradient_steps == 4
+    assert goal.policy.multi_pass == (algo == "MPDQN")
     lane = goal.get_env().envs[0]
     while not isinstance(lane, ScaleReward):
         lane = lane.env
     assert lane.scale == 0.02
     assert goal.observation_space == domains.episodic_env("Goal-v0").observation_space  # scored on what it saw
+
+
+def test_the_peers_without_an_entry_take_the_stated_fallback():
+    """HybridPPO on Moving: hppo.yml's Platform entry (the rule of all its entries) on the domain's env; MP-DQN on
+    Moving: its defaults."""
+    from benchmarks.models import build_model
+
     hppo, _, _ = build_model(Cell("Moving-v0", "HybridPPO", "hybridppo", 0, 1000))
     assert (hppo.n_envs, hppo.n_steps, hppo.batch_size, hppo.ent_coef) == (8, 256, 256, 0.01)
     assert hppo.observation_space == domains.episodic_env("Moving-v0").observation_space
