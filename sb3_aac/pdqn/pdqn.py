@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import io
 import pathlib
+from collections.abc import Callable
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -48,6 +49,15 @@ def invert_gradients(grad: th.Tensor, params: th.Tensor) -> th.Tensor:
     down by ``(x + 1) / 2``: it fades as ``x`` approaches the bound it points to and reverses once ``x`` is beyond it.
     """
     return th.where(grad > 0, grad * (1.0 - params), grad * (params + 1.0)) / 2.0
+
+
+def inverted_descent_hook(params: th.Tensor) -> Callable[[th.Tensor], th.Tensor]:
+    """
+    A gradient hook for ``params`` that turns the descent direction ``-dQ/dx`` into ``-invert_gradients(dQ/dx,
+    params)``: negations are exact, so the same bits as inverting a separately computed ``dQ/dx``.
+    """
+    bound = params.detach()
+    return lambda descent: -invert_gradients(-descent, bound)
 
 
 class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
@@ -431,10 +441,8 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
             params = policy.actor(features)
             actor_loss = -policy.q_net(features, params).sum(1).mean()
             if invert:
-                # One backward pass: the hook turns -dQ/dx, on its way into the actor, into the inverted descent
-                # direction (negations are exact, so the same bits as inverting a separately computed dQ/dx).
-                bound = params.detach()
-                params.register_hook(lambda descent: -invert_gradients(-descent, bound))
+                # One backward pass: the hook inverts the gradient on its way into the actor.
+                params.register_hook(inverted_descent_hook(params))
             # The actor's gradients only: the Q network's are not needed (the next Q step replaces them).
             actor_grads = th.autograd.grad(actor_loss, actor_params)
             actor_loss = actor_loss.detach()
