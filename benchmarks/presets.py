@@ -354,8 +354,8 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 #   CatchPoint and Platform, which run their documented defaults (studies that could not rank their trials: on
 #   CatchPoint the one tuning seed, TUNE_SEED, scores 0 with TD3's defaults after 5k-15k env steps where seed 0 scores
 #   0.3, and the first five trials scored 0 at every evaluation; on Platform the first four trials scored 0.283 at every
-#   evaluation), and nothing on HFO, where a study of 20 trials of HFO_BUDGET // 2 env steps and a tuned twin of 10
-#   seeds cost about 2 core-hours a learner.
+#   evaluation), TD3 on Goal (its rows came last, with no time left for a study), and nothing on HFO, where a study of
+#   20 trials of HFO_BUDGET // 2 env steps and a tuned twin of 10 seeds cost about 2 core-hours a learner.
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners and HFO's torch learners.
 #
