@@ -445,7 +445,6 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
                 params.register_hook(inverted_descent_hook(params))
             # The actor's gradients only: the Q network's are not needed (the next Q step replaces them).
             actor_grads = th.autograd.grad(actor_loss, actor_params)
-            actor_loss = actor_loss.detach()
             clip_grad_norm(actor_grads, self.max_grad_norm)
             set_grads(actor_params, actor_grads)
             policy.actor_optimizer.step()

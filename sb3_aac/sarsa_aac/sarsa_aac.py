@@ -556,7 +556,7 @@ class SarsaAAC(GuardedAlgorithmMixin, TrainingMonitor):
         truncated = [i - start for i in terminal_obs if start <= i < start + n]
         traces = self._traces
         if traces is not None and n < self.n_envs:
-            assert isinstance(traces, DeepTraces)  # lanes are split only where there are hidden layers: no tile traces
+            assert isinstance(traces, DeepTraces)  # the only other traces are TilePolicy's, whose lanes are not split
             traces = traces.lanes(lanes)
         batch = np.concatenate((obs, next_obs, *[terminal_obs[start + i][None] for i in truncated]))
         # One forward pass for s (weights as they are now), s' and the terminal observations.
