@@ -66,8 +66,8 @@ def journal_trials(path: Path, study_name: str) -> list[optuna.trial.FrozenTrial
 
 def test_the_plan_gives_every_learner_a_study_of_the_same_size():
     studies = plan_studies("full")
-    # SarsaAAC's TilePolicy and DeepPolicy on every env but HFO (nothing is tuned there), HybridPPO and PPO
-    # wherever they run but HFO, MP-DQN on the paper env, Platform and Goal, P-DQN on Platform and Goal, TD3 on both
+    # SarsaAAC's TilePolicy and DeepPolicy on every env but HFO, HybridPPO wherever it runs and PPO wherever it runs
+    # but HFO, MP-DQN on the paper env, Platform and Goal, P-DQN on Platform and Goal, TD3 on both
     # dribbling envs
     sarsa, on_policy = ("SarsaAAC-tile", "SarsaAAC-deep"), ("HybridPPO", "PPO")
     assert [s.name for s in studies] == [
@@ -78,6 +78,7 @@ def test_the_plan_gives_every_learner_a_study_of_the_same_size():
         *(f"catchpoint__{learner}" for learner in sarsa),
         *(f"moving__{learner}" for learner in (*sarsa, *on_policy)),
         *(f"sliding__{learner}" for learner in (*sarsa, *on_policy)),
+        "hfo__HybridPPO",
     ]
     for env_id in {s.env_id for s in studies}:
         sizes = {(s.trials, s.env_steps, s.seeds, s.evaluations, s.eval_episodes) for s in studies if s.env_id == env_id}
