@@ -337,7 +337,7 @@ HEADLINE_SEEDS = tuple(range(10))  # a headline pair's learners: >= 10 seeds (be
 PAPER_SEEDS = tuple(range(5))  # the paper's configs, the long and the wall-clock budgets, and costly default rows
 FEW_SEEDS = tuple(range(3))  # every other learner
 
-# full: the regeneration, sized to about 23 core-hours on the development machine (27.0 measured by 2026-12-07;
+# full: the regeneration, sized to about 26 core-hours on the development machine (30.1 measured by 2026-12-07;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 110-600 env steps/s on
 # one core (MP-DQN 4 ms a step, TD3 1.8), many times slower than SarsaAAC (the report's "Training cost" line), so 10
