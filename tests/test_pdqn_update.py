@@ -1,5 +1,6 @@
-"""P-DQN's and MP-DQN's gradient steps give exactly the numbers of the plain formulation (module calls, ``backward``,
-torch's ``clip_grad_norm_``, SB3's ``polyak_update``) when both use the per-tensor optimizer loop."""
+"""P-DQN's and MP-DQN's gradient steps (explicit gradients) give the numbers of the plain formulation (module calls,
+autograd's ``backward``, torch's ``clip_grad_norm_``, SB3's ``polyak_update``) to rounding when both use the
+per-tensor optimizer loop."""
 
 import copy
 
@@ -10,15 +11,18 @@ from stable_baselines3.common.utils import polyak_update
 
 from sb3_aac import MPDQN, PDQN
 from sb3_aac.common.envs import ParameterizedTargetEnv
-from sb3_aac.pdqn.pdqn import LOSSES, invert_gradients
+from torch.nn import functional as F
+
+from sb3_aac.pdqn.pdqn import invert_gradients
 from sb3_aac.pdqn.policies import PDQNPolicy
 
 LOOP = dict(optimizer_kwargs=dict(foreach=False))  # torch's per-tensor Adam: the arithmetic of the plain update
+PLAIN_LOSSES = {"mse": F.mse_loss, "huber": F.smooth_l1_loss}
 
 
 def plain_train(model, policy: PDQNPolicy, rng: np.random.Generator, gradient_steps: int, batch_size: int) -> None:
     """The gradient steps of ``model`` written plainly, applied to ``policy`` (a copy of the model's)."""
-    loss_fn, invert = LOSSES[model.loss], policy.param_bounding == "invert_gradients"
+    loss_fn, invert = PLAIN_LOSSES[model.loss], policy.param_bounding == "invert_gradients"
     for n_updates in range(model._n_updates + 1, model._n_updates + gradient_steps + 1):
         data = model.replay_buffer.sample(batch_size, rng)
         features, next_features = policy.features(data.observations), policy.features(data.next_observations)
@@ -59,7 +63,7 @@ def plain_train(model, policy: PDQNPolicy, rng: np.random.Generator, gradient_st
         dict(max_grad_norm=1e-3),  # every step clipped
     ],
 )
-def test_gradient_steps_are_the_plain_formulation_bit_for_bit(algo, settings):
+def test_gradient_steps_are_the_plain_formulation(algo, settings):
     settings = dict(settings)
     policy_kwargs = dict(net_arch=[16, 16], **LOOP, **settings.pop("policy_kwargs", {}))
     env = ParameterizedTargetEnv()
@@ -71,7 +75,8 @@ def test_gradient_steps_are_the_plain_formulation_bit_for_bit(algo, settings):
     plain_train(model, policy, rng, gradient_steps=5, batch_size=32)
     model.train(gradient_steps=5, batch_size=32)
     fast, plain = model.policy.state_dict(), policy.state_dict()
-    assert all(th.equal(fast[name], plain[name]) for name in plain)
+    differences = {name: float((fast[name] - plain[name]).abs().max()) for name in plain}
+    assert max(differences.values()) < 1e-6, differences
     assert not all(th.equal(fast[name], before[name]) for name in before)
 
 

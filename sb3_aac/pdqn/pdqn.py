@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import io
 import pathlib
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
@@ -31,6 +31,7 @@ from sb3_aac.common.hyperparameters import check_counts, check_fraction, check_p
 from sb3_aac.common.model_files import check_policy_class
 from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
+from sb3_aac.common import mlp_gradients
 from sb3_aac.common.updates import clip_grad_norm, polyak_update, set_grads
 from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer
 from sb3_aac.pdqn.noise import ParamNoise
@@ -38,7 +39,20 @@ from sb3_aac.pdqn.policies import MlpPolicy, PDQNPolicy
 
 SelfPDQN = TypeVar("SelfPDQN", bound="PDQN")
 
-LOSSES = {"mse": F.mse_loss, "huber": F.smooth_l1_loss}
+
+def mse_loss(q: th.Tensor, target: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
+    """The mean squared error of ``q`` ``(n,)`` and its gradient with respect to ``q``."""
+    error = q - target
+    return F.mse_loss(q, target), error * (2.0 / len(q))
+
+
+def huber_loss(q: th.Tensor, target: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
+    """The Huber loss (``smooth_l1_loss``, threshold 1) of ``q`` ``(n,)`` and its gradient with respect to ``q``."""
+    return F.smooth_l1_loss(q, target), (q - target).clamp(-1.0, 1.0) / len(q)
+
+
+# The Q network's loss functions: (q, target) -> (loss, d loss / d q).
+LOSSES: dict[str, Callable[[th.Tensor, th.Tensor], tuple[th.Tensor, th.Tensor]]] = {"mse": mse_loss, "huber": huber_loss}
 
 
 def invert_gradients(grad: th.Tensor, params: th.Tensor) -> th.Tensor:
@@ -49,15 +63,6 @@ def invert_gradients(grad: th.Tensor, params: th.Tensor) -> th.Tensor:
     down by ``(x + 1) / 2``: it fades as ``x`` approaches the bound it points to and reverses once ``x`` is beyond it.
     """
     return th.where(grad > 0, grad * (1.0 - params), grad * (params + 1.0)) / 2.0
-
-
-def inverted_descent_hook(params: th.Tensor) -> Callable[[th.Tensor], th.Tensor]:
-    """
-    A gradient hook for ``params`` that turns the descent direction ``-dQ/dx`` into ``-invert_gradients(dQ/dx,
-    params)``: negations are exact, so the same bits as inverting a separately computed ``dQ/dx``.
-    """
-    bound = params.detach()
-    return lambda descent: -invert_gradients(-descent, bound)
 
 
 class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
@@ -412,50 +417,60 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
     # ------------------------------------------------------------------ training
 
     def train(self, gradient_steps: int, batch_size: int = 128) -> None:
-        """``gradient_steps`` updates of the Q network and the parameter actor, each followed by the target update."""
+        """
+        ``gradient_steps`` updates of the Q network and the parameter actor, each followed by the target update; the
+        gradients are explicit matrix products (:mod:`sb3_aac.common.mlp_gradients`). The Q step runs each sample
+        through its own type's pass only (with MP-DQN, the other passes do not affect ``Q(s, k, x)``).
+        """
         policy = self.policy
         progress = self._current_progress_remaining
         q_lr, actor_lr = self.lr_schedule(progress), self.actor_lr_schedule(progress)
         update_learning_rate(policy.q_optimizer, q_lr)
         update_learning_rate(policy.actor_optimizer, actor_lr)
         loss_fn, invert = LOSSES[self.loss], policy.param_bounding == "invert_gradients"
-        q_params, actor_params = policy.q_net_params, policy.actor_params
+        q_net, actor = policy.q_net, policy.actor
         q_losses, actor_losses, q_values = [], [], []
-        for _ in range(gradient_steps):
-            data = self.replay_buffer.sample(batch_size, self._rng)
-            features, next_features = policy.features(data.observations), policy.features(data.next_observations)
+        with th.no_grad():
+            for _ in range(gradient_steps):
+                data = self.replay_buffer.sample(batch_size, self._rng)
+                features, next_features = policy.features(data.observations), policy.features(data.next_observations)
+                n_features = features.shape[1]
 
-            with th.no_grad():
                 next_params = policy.actor_target(next_features)
                 if invert:  # the env receives clipped parameters
                     next_params = next_params.clamp(-1.0, 1.0)
                 next_q = policy.q_net_target(next_features, next_params).max(1).values
                 target = data.rewards + (1.0 - data.dones) * self.gamma * next_q
-            q = policy.q_net(features, data.params).gather(1, data.action_types.unsqueeze(1)).squeeze(1)
-            q_loss = loss_fn(q, target)
-            q_grads = th.autograd.grad(q_loss, q_params)
-            clip_grad_norm(q_grads, self.max_grad_norm)
-            set_grads(q_params, q_grads)
-            policy.q_optimizer.step()
 
-            params = policy.actor(features)
-            actor_loss = -policy.q_net(features, params).sum(1).mean()
-            if invert:
-                # One backward pass: the hook inverts the gradient on its way into the actor.
-                params.register_hook(inverted_descent_hook(params))
-            # The actor's gradients only: the Q network's are not needed (the next Q step replaces them).
-            actor_grads = th.autograd.grad(actor_loss, actor_params)
-            clip_grad_norm(actor_grads, self.max_grad_norm)
-            set_grads(actor_params, actor_grads)
-            policy.actor_optimizer.step()
+                types = data.action_types.unsqueeze(1)
+                inputs = q_net.chosen_inputs(features, data.params, data.action_types)
+                outputs, saved = mlp_gradients.forward(q_net.net, inputs)
+                q = outputs.gather(1, types).squeeze(1)
+                q_loss, q_grad = loss_fn(q, target)
+                output_grads = th.zeros_like(outputs).scatter_(1, types, q_grad.unsqueeze(1))
+                q_grads, _ = mlp_gradients.backward(q_net.net, saved, output_grads)
+                self._step(policy.q_optimizer, policy.q_net_params, q_grads)
 
-            self._n_updates += 1
-            if self._n_updates % self.target_update_interval == 0:
-                polyak_update(q_params, policy.q_net_target_params, self.tau)
-                polyak_update(actor_params, policy.actor_target_params, self.actor_tau)
-            q_losses.append(q_loss.detach())
-            actor_losses.append(actor_loss.detach())
-            q_values.append(q.detach())
+                # The parameter actor ascends sum_k Q(s, k, x(s)): its loss is -mean_n sum_k Q.
+                mlp_outputs, actor_saved = mlp_gradients.forward(actor.net, features)
+                params = actor.bound(mlp_outputs)
+                outputs, saved = mlp_gradients.forward(q_net.net, q_net.pass_inputs(features, params))
+                actor_loss = -q_net.values(outputs).sum(1).mean()
+                value_grads = th.full((len(features), q_net.n_types), -1.0 / len(features), device=features.device)
+                _, input_grads = mlp_gradients.backward(q_net.net, saved, q_net.output_grads(value_grads), weights=False)
+                param_grads = q_net.param_grads(input_grads, n_features)
+                if invert:
+                    param_grads = -invert_gradients(-param_grads, params)
+                actor_grads, _ = mlp_gradients.backward(actor.net, actor_saved, actor.mlp_output_grads(param_grads, params))
+                self._step(policy.actor_optimizer, policy.actor_params, actor_grads)
+
+                self._n_updates += 1
+                if self._n_updates % self.target_update_interval == 0:
+                    polyak_update(policy.q_net_params, policy.q_net_target_params, self.tau)
+                    polyak_update(policy.actor_params, policy.actor_target_params, self.actor_tau)
+                q_losses.append(q_loss)
+                actor_losses.append(actor_loss)
+                q_values.append(q)
 
         q_loss_values, actor_loss_values = th.stack(q_losses).cpu().numpy(), th.stack(actor_losses).cpu().numpy()
         if not np.isfinite(q_loss_values).all():
@@ -468,6 +483,12 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
         self.logger.record("train/critic_loss", float(q_loss_values.mean()))
         self.logger.record("train/actor_loss", float(actor_loss_values.mean()))
         self._action_stats.add_values(th.cat(q_values).cpu().numpy())
+
+    def _step(self, optimizer: th.optim.Optimizer, params: Sequence[th.Tensor], grads: Sequence[th.Tensor]) -> None:
+        """One optimizer step of ``params`` along ``grads``, their joint norm clipped to ``max_grad_norm``."""
+        clip_grad_norm(grads, self.max_grad_norm)
+        set_grads(params, grads)
+        optimizer.step()
 
     def _raise_divergence(self, what: str) -> None:
         remedy = (

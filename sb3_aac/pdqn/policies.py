@@ -53,15 +53,51 @@ class QNetwork(nn.Module):
 
     def forward(self, features: th.Tensor, params: th.Tensor) -> th.Tensor:
         """``(n, K)`` values of every type, given features ``(n, D)`` and scaled parameters ``(n, n_params)``."""
+        return self.values(run_layers(self.net, self.pass_inputs(features, params)))
+
+    def pass_inputs(self, features: th.Tensor, params: th.Tensor) -> th.Tensor:
+        """
+        The network's input rows: ``[s, x]`` ``(n, D + n_params)``, or with ``multi_pass`` the ``K`` passes as one
+        batch ``(K * n, D + n_params)``, pass ``j`` (rows ``j * n`` to ``(j + 1) * n - 1``) holding only type ``j``'s
+        parameters.
+        """
         if not self.multi_pass:
-            return run_layers(self.net, th.cat((features, params), dim=1))
+            return th.cat((features, params), dim=1)
         n, k = len(features), self.n_types
-        # Pass j: features and only type j's parameters; rows j*n .. (j+1)*n - 1.
         masked = params.unsqueeze(0) * self.owner_mask.unsqueeze(1)  # (K, n, n_params)
-        passes = th.cat((features.expand(k, n, -1), masked), dim=2).reshape(k * n, -1)
-        q_all = run_layers(self.net, passes).reshape(k, n, k)
-        diagonal: th.Tensor = q_all.diagonal(dim1=0, dim2=2)  # (n, K): Q_j taken from pass j
+        return th.cat((features.expand(k, n, -1), masked), dim=2).reshape(k * n, -1)
+
+    def values(self, outputs: th.Tensor) -> th.Tensor:
+        """``(n, K)`` values from the network's outputs on :meth:`pass_inputs` (with ``multi_pass``, ``Q_j`` of pass ``j``)."""
+        if not self.multi_pass:
+            return outputs
+        k = self.n_types
+        diagonal: th.Tensor = outputs.reshape(k, -1, k).diagonal(dim1=0, dim2=2)
         return diagonal
+
+    def output_grads(self, value_grads: th.Tensor) -> th.Tensor:
+        """The gradient with respect to the network's outputs on :meth:`pass_inputs`, given that of :meth:`values`."""
+        if not self.multi_pass:
+            return value_grads
+        eye = th.eye(self.n_types, dtype=value_grads.dtype, device=value_grads.device)
+        return (value_grads.t().unsqueeze(2) * eye.unsqueeze(1)).reshape(-1, self.n_types)
+
+    def param_grads(self, input_grads: th.Tensor, n_features: int) -> th.Tensor:
+        """The gradient with respect to the parameters ``(n, n_params)``, given that of :meth:`pass_inputs`' rows."""
+        grads = input_grads[:, n_features:]
+        if not self.multi_pass:
+            return grads
+        k = self.n_types
+        return (grads.reshape(k, -1, grads.shape[1]) * self.owner_mask.unsqueeze(1)).sum(0)
+
+    def chosen_inputs(self, features: th.Tensor, params: th.Tensor, types: th.Tensor) -> th.Tensor:
+        """
+        Input rows ``(n, D + n_params)`` whose outputs hold ``Q(s, k, x)`` at column ``k = types``: ``[s, x]``, or with
+        ``multi_pass`` the one pass of each row's type (the other passes do not affect that value).
+        """
+        if not self.multi_pass:
+            return self.pass_inputs(features, params)
+        return th.cat((features, params * self.owner_mask[types]), dim=1)
 
 
 class ParamActor(nn.Module):
@@ -102,8 +138,16 @@ class ParamActor(nn.Module):
         self.register_buffer("offset", th.as_tensor(offset, dtype=th.float32))
 
     def forward(self, features: th.Tensor) -> th.Tensor:
-        out = run_layers(self.net, features) + self.offset
+        return self.bound(run_layers(self.net, features))
+
+    def bound(self, mlp_outputs: th.Tensor) -> th.Tensor:
+        """The parameters ``(n, n_params)`` from the MLP's outputs."""
+        out = mlp_outputs + self.offset
         return th.tanh(out) if self.squash else out
+
+    def mlp_output_grads(self, param_grads: th.Tensor, params: th.Tensor) -> th.Tensor:
+        """The gradient with respect to the MLP's outputs, given that of the parameters :meth:`bound` gave."""
+        return th.ops.aten.tanh_backward(param_grads, params) if self.squash else param_grads
 
 
 class PDQNPolicy(BasePolicy):
