@@ -483,7 +483,8 @@ FULL: dict[str, Any] = {
         ),
         "CatchPoint-v0": _env(
             50_000,
-            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "TD3"),
+            # MP-DQN and P-DQN: their constructor defaults (no published settings for this domain). TD3: its defaults
+            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "TD3", "MPDQN", "PDQN"),
             _learners(*_SARSA_HEADLINE),
             25_000,
             **_EPISODIC_SIZES,
