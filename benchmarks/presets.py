@@ -491,7 +491,8 @@ FULL: dict[str, Any] = {
         ),
         "Moving-v0": _env(
             100_000,
-            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "TD3"),
+            # MP-DQN and P-DQN: their constructor defaults (no published settings for this domain)
+            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "TD3", "MPDQN", "PDQN"),
             _learners(*_SARSA_HEADLINE, *_ON_POLICY),
             50_000,
             **_EPISODIC_SIZES,
