@@ -340,8 +340,9 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 # full: the regeneration, sized to about 26 core-hours on the development machine (30.1 measured by 2026-12-07;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 110-600 env steps/s on
-# one core (MP-DQN 4 ms a step, TD3 1.8), many times slower than SarsaAAC (the report's "Training cost" line), so 10
-# seeds of them at a 50k budget cost what all of SarsaAAC's cells together cost. Hence, per env:
+# one core (``python -m benchmarks.speed.training pdqn``: MP-DQN 2.5-3 ms a step, as TD3), many times slower than
+# SarsaAAC (the report's "Training cost" line), so 10 seeds of them at a 50k budget cost what all of SarsaAAC's cells
+# together cost. Hence, per env:
 #
 # * ``runs``: the headline learners with HEADLINE_SEEDS (SarsaAAC's TilePolicy and DeepPolicy on every env, so the
 #   recommended policy is chosen by tests on 10 seeds), the others with FEW_SEEDS (the defaults of a learner whose
@@ -351,14 +352,15 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 #   defaults were chosen on a few of our tasks), HybridPPO wherever it runs and PPO wherever it runs but on HFO (their
 #   defaults are their libraries'), MP-DQN on the paper env, Platform and Goal and P-DQN on Platform and Goal (their
 #   rows without a study run the reference MP-DQN code's published settings), TD3 on both dribbling envs. Not tuned:
-#   TD3 on CatchPoint, Platform and Goal, which run their documented defaults (studies that could not rank their
-#   trials: on CatchPoint the one tuning seed, TUNE_SEED, scores 0 with TD3's defaults after 5k-15k env steps where
-#   seed 0 scores 0.3, and the first five trials scored 0 at every evaluation; on Platform the first four trials scored
-#   0.283 at every evaluation; on Goal the first seven trials, and the eighth at its first four, scored 0 at every
-#   evaluation), TD3 on Moving and Sliding (its rows came last, with no time left for studies), and on HFO all but
-#   HybridPPO (the parameterized peer of its verdict), where a study of 20 trials of HFO_BUDGET // 2 env steps and a
-#   tuned twin of 10 seeds cost about 2 core-hours a learner (DeepPolicy's defaults already score P(goal)
-#   0.994 there, mean of 10 seeds).
+#   MP-DQN and P-DQN on CatchPoint and Moving, which run their constructor defaults (no published settings there; their
+#   rows came last, with no time left for studies); TD3 on CatchPoint, Platform and Goal, which run their documented
+#   defaults (studies that could not rank their trials: on CatchPoint the one tuning seed, TUNE_SEED, scores 0 with
+#   TD3's defaults after 5k-15k env steps where seed 0 scores 0.3, and the first five trials scored 0 at every
+#   evaluation; on Platform the first four trials scored 0.283 at every evaluation; on Goal the first seven trials, and
+#   the eighth at its first four, scored 0 at every evaluation), TD3 on Moving and Sliding (its rows came last, with no
+#   time left for studies), and on HFO all but HybridPPO (the parameterized peer of its verdict), where a study of 20
+#   trials of HFO_BUDGET // 2 env steps and a tuned twin of 10 seeds cost about 2 core-hours a learner (DeepPolicy's
+#   defaults already score P(goal) 0.994 there, mean of 10 seeds).
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners and HFO's torch learners.
 #

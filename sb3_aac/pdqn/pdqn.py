@@ -33,7 +33,7 @@ from sb3_aac.common.seeding import algorithm_generator
 from sb3_aac.common.observations import observation_batch
 from sb3_aac.common import mlp_gradients
 from sb3_aac.common.updates import clip_grad_norm, polyak_update, set_grads
-from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer
+from sb3_aac.pdqn.buffers import ParameterizedReplayBuffer, ParameterizedReplayBufferSamples
 from sb3_aac.pdqn.noise import ParamNoise
 from sb3_aac.pdqn.policies import MlpPolicy, PDQNPolicy
 
@@ -42,8 +42,7 @@ SelfPDQN = TypeVar("SelfPDQN", bound="PDQN")
 
 def mse_loss(q: th.Tensor, target: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
     """The mean squared error of ``q`` ``(n,)`` and its gradient with respect to ``q``."""
-    error = q - target
-    return F.mse_loss(q, target), error * (2.0 / len(q))
+    return F.mse_loss(q, target), (q - target) * (2.0 / len(q))
 
 
 def huber_loss(q: th.Tensor, target: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
@@ -427,49 +426,18 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
         q_lr, actor_lr = self.lr_schedule(progress), self.actor_lr_schedule(progress)
         update_learning_rate(policy.q_optimizer, q_lr)
         update_learning_rate(policy.actor_optimizer, actor_lr)
-        loss_fn, invert = LOSSES[self.loss], policy.param_bounding == "invert_gradients"
-        q_net, actor = policy.q_net, policy.actor
         q_losses, actor_losses, q_values = [], [], []
         with th.no_grad():
             for _ in range(gradient_steps):
                 data = self.replay_buffer.sample(batch_size, self._rng)
-                features, next_features = policy.features(data.observations), policy.features(data.next_observations)
-                n_features = features.shape[1]
-
-                next_params = policy.actor_target(next_features)
-                if invert:  # the env receives clipped parameters
-                    next_params = next_params.clamp(-1.0, 1.0)
-                next_q = policy.q_net_target(next_features, next_params).max(1).values
-                target = data.rewards + (1.0 - data.dones) * self.gamma * next_q
-
-                types = data.action_types.unsqueeze(1)
-                inputs = q_net.chosen_inputs(features, data.params, data.action_types)
-                outputs, saved = mlp_gradients.forward(q_net.net, inputs)
-                q = outputs.gather(1, types).squeeze(1)
-                q_loss, q_grad = loss_fn(q, target)
-                output_grads = th.zeros_like(outputs).scatter_(1, types, q_grad.unsqueeze(1))
-                q_grads, _ = mlp_gradients.backward(q_net.net, saved, output_grads)
-                self._step(policy.q_optimizer, policy.q_net_params, q_grads)
-
-                # The parameter actor ascends sum_k Q(s, k, x(s)): its loss is -mean_n sum_k Q.
-                mlp_outputs, actor_saved = mlp_gradients.forward(actor.net, features)
-                params = actor.bound(mlp_outputs)
-                outputs, saved = mlp_gradients.forward(q_net.net, q_net.pass_inputs(features, params))
-                actor_loss = -q_net.values(outputs).sum(1).mean()
-                value_grads = th.full((len(features), q_net.n_types), -1.0 / len(features), device=features.device)
-                _, input_grads = mlp_gradients.backward(q_net.net, saved, q_net.output_grads(value_grads), weights=False)
-                param_grads = q_net.param_grads(input_grads, n_features)
-                if invert:
-                    param_grads = -invert_gradients(-param_grads, params)
-                actor_grads, _ = mlp_gradients.backward(actor.net, actor_saved, actor.mlp_output_grads(param_grads, params))
-                self._step(policy.actor_optimizer, policy.actor_params, actor_grads)
-
+                features = policy.features(data.observations)
+                q_loss, q = self._q_step(data, features)
+                actor_losses.append(self._actor_step(features))
                 self._n_updates += 1
                 if self._n_updates % self.target_update_interval == 0:
                     polyak_update(policy.q_net_params, policy.q_net_target_params, self.tau)
                     polyak_update(policy.actor_params, policy.actor_target_params, self.actor_tau)
                 q_losses.append(q_loss)
-                actor_losses.append(actor_loss)
                 q_values.append(q)
 
         q_loss_values, actor_loss_values = th.stack(q_losses).cpu().numpy(), th.stack(actor_losses).cpu().numpy()
@@ -483,6 +451,40 @@ class PDQN(GuardedAlgorithmMixin, EpisodeStatsMixin, OffPolicyAlgorithm):
         self.logger.record("train/critic_loss", float(q_loss_values.mean()))
         self.logger.record("train/actor_loss", float(actor_loss_values.mean()))
         self._action_stats.add_values(th.cat(q_values).cpu().numpy())
+
+    def _q_step(self, data: ParameterizedReplayBufferSamples, features: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
+        """The Q network's step on a minibatch; returns its loss and ``Q(s, k, x)`` ``(n,)`` before the step."""
+        policy, q_net = self.policy, self.policy.q_net
+        next_features = policy.features(data.next_observations)
+        next_params = policy.actor_target(next_features)
+        if policy.param_bounding == "invert_gradients":  # the env receives clipped parameters
+            next_params = next_params.clamp(-1.0, 1.0)
+        next_q = policy.q_net_target(next_features, next_params).max(1).values
+        target = data.rewards + (1.0 - data.dones) * self.gamma * next_q
+
+        types = data.action_types.unsqueeze(1)
+        outputs, saved = mlp_gradients.forward(q_net.net, q_net.chosen_inputs(features, data.params, data.action_types))
+        q = outputs.gather(1, types).squeeze(1)
+        loss, q_grad = LOSSES[self.loss](q, target)
+        output_grads = th.zeros_like(outputs).scatter_(1, types, q_grad.unsqueeze(1))
+        self._step(policy.q_optimizer, policy.q_net_params, mlp_gradients.backward(q_net.net, saved, output_grads)[0])
+        return loss, q
+
+    def _actor_step(self, features: th.Tensor) -> th.Tensor:
+        """The parameter actor's step, ascending ``sum_k Q(s, k, x(s))``; returns its loss ``-mean_s sum_k Q``."""
+        policy, q_net, actor = self.policy, self.policy.q_net, self.policy.actor
+        mlp_outputs, actor_saved = mlp_gradients.forward(actor.net, features)
+        params = actor.bound(mlp_outputs)
+        outputs, saved = mlp_gradients.forward(q_net.net, q_net.pass_inputs(features, params))
+        loss = -q_net.values(outputs).sum(1).mean()
+        value_grads = th.full((len(features), q_net.n_types), -1.0 / len(features), device=features.device)
+        _, input_grads = mlp_gradients.backward(q_net.net, saved, q_net.output_grads(value_grads), weights=False)
+        descent = q_net.param_grads(input_grads, features.shape[1])  # d loss / dx = -dQ/dx
+        if policy.param_bounding == "invert_gradients":
+            descent = -invert_gradients(-descent, params)
+        actor_grads, _ = mlp_gradients.backward(actor.net, actor_saved, actor.mlp_output_grads(descent, params))
+        self._step(policy.actor_optimizer, policy.actor_params, actor_grads)
+        return loss
 
     def _step(self, optimizer: th.optim.Optimizer, params: Sequence[th.Tensor], grads: Sequence[th.Tensor]) -> None:
         """One optimizer step of ``params`` along ``grads``, their joint norm clipped to ``max_grad_norm``."""
