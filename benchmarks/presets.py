@@ -177,7 +177,9 @@ ON_POLICY = ("PPO", "A2C")
 # train_wall_s over the finished cells of benchmarks/results (50k steps, load 2-3 on two cores; SAC's, DDPG's and
 # P-DQN's paper-env cells ran three processes on two cores, so their medians 74, 145 and 209 times 1.5, P-DQN's
 # agreeing with the 350 it had); DeepPolicy and HybridPPO (no such cells) as their same-run ratio to TilePolicy and
-# PPO times those figures (docs/benchmarks.md, "Cost"). With ENV_STEP_SECONDS they give a learner's rate on each env
+# PPO times those figures (docs/benchmarks.md, "Cost"). P-DQN's and MP-DQN's, measured as 350 and 250 before their
+# explicit-gradient training step, times that step's same-run speed-up (``python -m benchmarks.speed.versus 20f1865``:
+# 1.23x and 1.27x before it, 1.69x and 1.76x after). With ENV_STEP_SECONDS they give a learner's rate on each env
 # (training_rate): the local pool starts the longest cells first, a wall-clock cell's schedule horizon is
 # WALL_CLOCK_HEADROOM times what its learner steps in its seconds, and benchmarks.cost estimates a preset's core-hours.
 STEPS_PER_SECOND = {
@@ -189,8 +191,8 @@ STEPS_PER_SECOND = {
     "TD3": 570,
     "DDPG": 215,
     "DQN": 1_300,
-    "PDQN": 350,
-    "MPDQN": 250,
+    "PDQN": 480,
+    "MPDQN": 350,
     "HybridPPO": 7_600,
 }
 # Seconds of one env step in a training VecEnv, the learner's work excluded: Platform's from its finished cells
@@ -211,7 +213,7 @@ ENV_STEP_SECONDS = {
 # A wall-clock cell's env-step horizon is this many times what its learner usually steps in its seconds
 # (training_rate), so that the clock, not the horizon, ends its training on a quiet machine too: at 1.0 the measured
 # rates of TilePolicy, DeepPolicy and MP-DQN (38k, 11.7k and 400 env steps/s on the paper env's 120 s cells, above
-# STEPS_PER_SECOND's 30k, 7k and 250) ended them by the horizon after 75-97 s, and on Half Field Offense MP-DQN and
+# STEPS_PER_SECOND's 30k, 7k and then 250) ended them by the horizon after 75-97 s, and on Half Field Offense MP-DQN and
 # P-DQN after 166-207 s of 300. The schedules run over the horizon, so they are at least half done at the stop.
 WALL_CLOCK_HEADROOM = 2.0
 
@@ -352,15 +354,15 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 #   defaults were chosen on a few of our tasks), HybridPPO wherever it runs and PPO wherever it runs but on HFO (their
 #   defaults are their libraries'), MP-DQN on the paper env, Platform and Goal and P-DQN on Platform and Goal (their
 #   rows without a study run the reference MP-DQN code's published settings), TD3 on both dribbling envs. Not tuned:
-#   MP-DQN and P-DQN on CatchPoint, Moving and Sliding, which run their constructor defaults (no published settings
-#   there; their rows came last, with no time left for studies); TD3 on CatchPoint, Platform and Goal, which run their
-#   documented defaults (studies that could not rank their trials: on CatchPoint the one tuning seed, TUNE_SEED, scores
-#   0 with TD3's defaults after 5k-15k env steps where seed 0 scores 0.3, and the first five trials scored 0 at every
-#   evaluation; on Platform the first four trials scored 0.283 at every evaluation; on Goal the first seven trials, and
-#   the eighth at its first four, scored 0 at every evaluation), TD3 on Moving and Sliding (its rows came last, with no
-#   time left for studies), and on HFO all but HybridPPO (the parameterized peer of its verdict), where a study of 20
-#   trials of HFO_BUDGET // 2 env steps and a tuned twin of 10 seeds cost about 2 core-hours a learner (DeepPolicy's
-#   defaults already score P(goal) 0.994 there, mean of 10 seeds).
+#   MP-DQN and P-DQN on CatchPoint and Moving, which run their constructor defaults (no published settings there; their
+#   rows came last, with no time left for studies; they are not on Sliding); TD3 on CatchPoint, Platform and Goal, which
+#   run their documented defaults (studies that could not rank their trials: on CatchPoint the one tuning seed,
+#   TUNE_SEED, scores 0 with TD3's defaults after 5k-15k env steps where seed 0 scores 0.3, and the first five trials
+#   scored 0 at every evaluation; on Platform the first four trials scored 0.283 at every evaluation; on Goal the first
+#   seven trials, and the eighth at its first four, scored 0 at every evaluation), TD3 on Moving and Sliding (its rows
+#   came last, with no time left for studies), and on HFO all but HybridPPO (the parameterized peer of its verdict),
+#   where a study of 20 trials of HFO_BUDGET // 2 env steps and a tuned twin of 10 seeds cost about 2 core-hours a
+#   learner (DeepPolicy's defaults already score P(goal) 0.994 there, mean of 10 seeds).
 # * ``long``: the paper's episode counts (LONG_BUDGET), for the configs the paper's claims are about; ``wall_clock``:
 #   equal seconds for the paper env's headline learners and HFO's torch learners.
 #
@@ -501,8 +503,7 @@ FULL: dict[str, Any] = {
         ),
         "Sliding-v0": _env(
             100_000,
-            # MP-DQN and P-DQN: their constructor defaults (no published settings for this domain)
-            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "TD3", "MPDQN", "PDQN"),
+            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "TD3"),
             _learners(*_SARSA_HEADLINE, *_ON_POLICY),
             50_000,
             **_EPISODIC_SIZES,
