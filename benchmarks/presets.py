@@ -339,7 +339,7 @@ HEADLINE_SEEDS = tuple(range(10))  # a headline pair's learners: >= 10 seeds (be
 PAPER_SEEDS = tuple(range(5))  # the paper's configs, the long and the wall-clock budgets, and costly default rows
 FEW_SEEDS = tuple(range(3))  # every other learner
 
-# full: the regeneration, sized to about 26 core-hours on the development machine (30.1 measured by 2026-12-07;
+# full: the regeneration, sized to about 26 core-hours on the development machine (31.7 measured by 2026-12-08;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 110-600 env steps/s on
 # one core (``python -m benchmarks.speed.training pdqn``: MP-DQN 2.5-3 ms a step, as TD3), many times slower than
@@ -428,7 +428,7 @@ _ON_POLICY = ("HybridPPO", "PPO")  # tuned wherever they run (on HFO HybridPPO o
 # too slowly there) against the hybrid peer and the best SB3 baseline at HFO_BUDGET env steps (~15,000 trials; ~90 s
 # of DeepPolicy's training on one core, about 5.5 minutes of HybridPPO's or PPO's), and every torch learner given
 # HFO_SECONDS of training, the wall-clock view of "within 10 minutes of one core" at the size one machine affords
-# (in those seconds MP-DQN stepped ~120k env steps, ~1,200 trials: 6 % of the 20,000 episodes of its published figure).
+# (in those seconds MP-DQN stepped ~135k env steps, ~1,300 trials: 7 % of the 20,000 episodes of its published figure).
 # The peers run their constructor defaults (no hyperparams entry for HFO); HybridPPO alone is tuned there (``tuned``).
 HFO_BUDGET = 1_500_000
 HFO_SECONDS = 300
