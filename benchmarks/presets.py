@@ -354,8 +354,8 @@ FEW_SEEDS = tuple(range(3))  # every other learner
 #   defaults were chosen on a few of our tasks), HybridPPO wherever it runs and PPO wherever it runs but on HFO (their
 #   defaults are their libraries'), MP-DQN on the paper env, Platform and Goal and P-DQN on Platform and Goal (their
 #   rows without a study run the reference MP-DQN code's published settings), TD3 on both dribbling envs. Not tuned:
-#   MP-DQN and P-DQN on CatchPoint and Moving, which run their constructor defaults (no published settings there; their
-#   rows came last, with no time left for studies; they are not on Sliding); TD3 on CatchPoint, Platform and Goal, which
+#   MP-DQN and P-DQN on CatchPoint, Moving and Sliding, which run their constructor defaults (no published settings
+#   there; their rows came last, with no time left for studies); TD3 on CatchPoint, Platform and Goal, which
 #   run their documented defaults (studies that could not rank their trials: on CatchPoint the one tuning seed,
 #   TUNE_SEED, scores 0 with TD3's defaults after 5k-15k env steps where seed 0 scores 0.3, and the first five trials
 #   scored 0 at every evaluation; on Platform the first four trials scored 0.283 at every evaluation; on Goal the first
@@ -503,7 +503,8 @@ FULL: dict[str, Any] = {
         ),
         "Sliding-v0": _env(
             100_000,
-            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "TD3"),
+            # MP-DQN and P-DQN: their constructor defaults, as on Moving-v0
+            _runs(HEADLINE_SEEDS, "SarsaAAC-tile", "SarsaAAC-deep", "HybridPPO", "PPO", "TD3", "MPDQN", "PDQN"),
             _learners(*_SARSA_HEADLINE, *_ON_POLICY),
             50_000,
             **_EPISODIC_SIZES,
