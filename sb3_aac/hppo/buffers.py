@@ -74,27 +74,25 @@ class HybridRolloutBuffer(RolloutBuffer):
         super().reset()
 
     def add(  # type: ignore[override]
-        self,
-        obs: np.ndarray,
-        action: np.ndarray,
-        reward: np.ndarray,
-        episode_start: np.ndarray,
-        value: np.ndarray,
-        type_log_prob: np.ndarray,
-        param_log_prob: np.ndarray,
+        self, obs: np.ndarray, action: np.ndarray, reward: np.ndarray, episode_start: np.ndarray
     ) -> None:
-        """One step of every env (each argument ``(n_envs, ...)``): SB3's ``add`` with the log-probability split into
-        its two parts, from arrays (no tensor copies)."""
+        """One step of every env (each argument ``(n_envs, ...)``), from arrays (no tensor copies); its value and
+        log-probabilities come with :meth:`set_evaluations` for the whole rollout."""
         pos = self.pos
         self.observations[pos] = obs
         self.actions[pos] = np.reshape(action, (self.n_envs, self.action_dim))
         self.rewards[pos] = reward
         self.episode_starts[pos] = episode_start
-        self.values[pos] = value
-        self.log_probs[pos] = type_log_prob
-        self.param_log_probs[pos] = param_log_prob
         self.pos = pos + 1
         self.full = self.pos == self.buffer_size
+
+    def set_evaluations(self, values: np.ndarray, type_log_prob: np.ndarray, param_log_prob: np.ndarray) -> None:
+        """The values and the type and parameter log-probabilities of the steps added so far, each ``(pos * n_envs,)``
+        in the order of the steps, then the envs."""
+        shape = (self.pos, self.n_envs)
+        self.values[: self.pos] = values.reshape(shape)
+        self.log_probs[: self.pos] = type_log_prob.reshape(shape)
+        self.param_log_probs[: self.pos] = param_log_prob.reshape(shape)
 
     def get(self, batch_size: int | None = None) -> Generator[HybridRolloutBufferSamples, None, None]:  # type: ignore[override]
         if not self.generator_ready:

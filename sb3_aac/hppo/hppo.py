@@ -20,7 +20,9 @@ from sb3_aac.common.episode_stats import EpisodeStatsMixin
 from sb3_aac.common.guards import GuardedAlgorithmMixin, check_finite_step, check_schedule
 from sb3_aac.common.hyperparameters import check_counts, check_finite, check_positive, check_unit_interval
 from sb3_aac.common.model_files import check_policy_class
+from sb3_aac.hppo.acting import RolloutActor
 from sb3_aac.hppo.buffers import HybridRolloutBuffer
+from sb3_aac.hppo.distributions import sample_packed
 from sb3_aac.hppo.policies import HybridActorCriticPolicy, MlpPolicy
 
 SelfHybridPPO = TypeVar("SelfHybridPPO", bound="HybridPPO")
@@ -222,20 +224,27 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
         rollout_buffer: HybridRolloutBuffer,
         n_rollout_steps: int,
     ) -> bool:
-        """Fill ``rollout_buffer`` with ``n_rollout_steps`` steps of every env (see ``OnPolicyAlgorithm.collect_rollouts``),
-        through the array path when the env offers it."""
+        """
+        Fill ``rollout_buffer`` with ``n_rollout_steps`` steps of every env (see ``OnPolicyAlgorithm.collect_rollouts``),
+        through the array path when the env offers it. The actors act through a :class:`~sb3_aac.hppo.acting.RolloutActor`
+        on the rollout's noise, drawn from torch's generator at its start; the values and log-probabilities of its
+        steps come from one batched pass of the policy at its end (:meth:`_evaluate_rollout`).
+        """
         assert self._last_obs is not None, "No previous observation was provided"
         self.policy.set_training_mode(False)
         arrays, spec = array_path(env), self.policy.spec
+        actor = RolloutActor(self.policy)
+        log_std = self.policy.log_std.detach().cpu().numpy()
+        exponential = th.empty((n_rollout_steps, env.num_envs, spec.n_types)).exponential_().numpy()
+        normal = th.randn((n_rollout_steps, env.num_envs, spec.n_params)).numpy()
         n_steps = 0
         rollout_buffer.reset()
         callback.on_rollout_start()
         while n_steps < n_rollout_steps:
-            with th.no_grad():
-                packed_t, values, type_log_prob, param_log_prob = self.policy(obs_as_tensor(self._last_obs, self.device))
-            packed, type_log_probs = packed_t.cpu().numpy(), type_log_prob.cpu().numpy()
-            if not np.isfinite(type_log_probs).all():
+            type_logits, mean = actor(self._last_obs)  # type: ignore[arg-type]
+            if not np.isfinite(type_logits).all():
                 self._raise_divergence("the policy's output (the type logits)")
+            packed = sample_packed(type_logits, mean, log_std, exponential[n_steps], normal[n_steps])
             if not np.isfinite(packed).all():
                 self._raise_divergence("the policy's output (the parameter means or standard deviations)")
             k, params = packed[:, 0].astype(np.int64), np.clip(packed[:, 1:], -1.0, 1.0)
@@ -254,24 +263,20 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
             callback.update_locals(locals())
             if not callback.on_step():
                 # The executed actions' statistics: the buffer's steps and this one (which no update learns from).
+                self._evaluate_rollout(rollout_buffer)
                 self._add_action_stats(rollout_buffer)
+                with th.no_grad():
+                    values = self.policy.predict_values(obs_as_tensor(self._last_obs, self.device))
                 self._action_stats.add(k, params, values.cpu().numpy())
                 return False
             if dones.any():
                 self._on_episodes_end(dones, infos)
                 self._bootstrap_truncated(rewards, dones, infos)
             n_steps += 1
-            rollout_buffer.add(
-                self._last_obs,  # type: ignore[arg-type]
-                packed,
-                rewards,
-                self._last_episode_starts,  # type: ignore[arg-type]
-                values.cpu().numpy(),
-                type_log_probs,
-                param_log_prob.cpu().numpy(),
-            )
+            rollout_buffer.add(self._last_obs, packed, rewards, self._last_episode_starts)  # type: ignore[arg-type]
             self._last_obs = new_obs
             self._last_episode_starts = dones
+        self._evaluate_rollout(rollout_buffer)
         self._add_action_stats(rollout_buffer)
         with th.no_grad():
             values = self.policy.predict_values(obs_as_tensor(new_obs, self.device))
@@ -279,6 +284,20 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
         callback.update_locals(locals())
         callback.on_rollout_end()
         return True
+
+    def _evaluate_rollout(self, rollout_buffer: HybridRolloutBuffer) -> None:
+        """The values and both log-probabilities of the buffer's steps under the policy that collected them, in one
+        batched pass of :meth:`HybridActorCriticPolicy.evaluate_actions` (the arithmetic the update then runs)."""
+        rows = rollout_buffer.pos * rollout_buffer.n_envs
+        if rows == 0:
+            return
+        obs = rollout_buffer.observations[: rollout_buffer.pos].reshape(rows, *rollout_buffer.obs_shape)
+        actions = rollout_buffer.actions[: rollout_buffer.pos].reshape(rows, rollout_buffer.action_dim)
+        with th.no_grad():
+            values, type_log_prob, param_log_prob, _, _ = self.policy.evaluate_actions(
+                rollout_buffer.to_torch(obs), rollout_buffer.to_torch(actions)
+            )
+        rollout_buffer.set_evaluations(values.cpu().numpy(), type_log_prob.cpu().numpy(), param_log_prob.cpu().numpy())
 
     def _add_action_stats(self, rollout_buffer: HybridRolloutBuffer) -> None:
         """The executed types, clipped parameters and values of the steps in ``rollout_buffer`` (one call per rollout)."""

@@ -174,14 +174,18 @@ class HybridActorCriticPolicy(BasePolicy):
         """The parameters of the critic's own layers (the features extractor excluded)."""
         return [*self.value_net.parameters(), *self.value_head.parameters()]
 
+    def _actor_outputs(self, features: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
+        latent = run_layers(self.shared_net, features)
+        return self.type_head(run_layers(self.type_net, latent)), self.mean_head(run_layers(self.params_net, latent))
+
+    def actor_outputs(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
+        """The type logits ``(n, K)`` (not normalised) and the parameter means ``(n, n_params)`` (scaled space)."""
+        return self._actor_outputs(self.extract_features(obs, self.features_extractor))
+
     def _distribution_and_value(self, obs: PyTorchObs) -> tuple[HybridDistribution, th.Tensor]:
         features = self.extract_features(obs, self.features_extractor)
-        latent = run_layers(self.shared_net, features)
-        type_logits = self.type_head(run_layers(self.type_net, latent))
         # a copy per call: predict from several threads shares no distribution state
-        distribution = copy.copy(self.action_dist).proba_distribution(
-            type_logits, self.mean_head(run_layers(self.params_net, latent)), self.log_std
-        )
+        distribution = copy.copy(self.action_dist).proba_distribution(*self._actor_outputs(features), self.log_std)
         return distribution, self.value_head(run_layers(self.value_net, features)).squeeze(1)
 
     def forward(self, obs: PyTorchObs, deterministic: bool = False) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor]:
