@@ -14,6 +14,7 @@ from sb3_aac import HybridPPO
 from sb3_aac.common.envs import ParameterizedTargetEnv
 from sb3_aac.hppo.acting import RolloutActor
 from sb3_aac.hppo.distributions import HybridDistribution, sample_packed
+from sb3_aac.hppo.policies import HybridActorCriticPolicy
 
 
 @settings(max_examples=50, deadline=None)
@@ -126,3 +127,19 @@ def test_rollout_stores_the_policys_values_and_log_probabilities_per_step_and_en
             assert buffer.values[step, lane] == pytest.approx(value.item(), rel=1e-5, abs=1e-6)
             assert buffer.log_probs[step, lane] == pytest.approx(type_log_prob.item(), rel=1e-5, abs=1e-6)
             assert buffer.param_log_probs[step, lane] == pytest.approx(param_log_prob.item(), rel=1e-5, abs=1e-6)
+
+
+@pytest.mark.parametrize("normalize_images", [True, False])
+def test_rollout_actor_reads_images_as_sb3s_preprocessing_does(normalize_images):
+    """SB3 divides image observations by 255 before the features extractor (``normalize_images``): the numpy actors,
+    and so the exported file, fold that into the input scaling."""
+    image_space = spaces.Box(0, 255, (3, 4, 4), np.uint8)
+    action_space = ParameterizedTargetEnv().action_space
+    policy = HybridActorCriticPolicy(image_space, action_space, lambda _: 3e-4, normalize_images=normalize_images)
+    actor = RolloutActor(policy)
+    assert actor.networks is not None
+    obs = np.random.default_rng(0).integers(0, 256, (16, 3, 4, 4)).astype(np.uint8)
+    with th.no_grad():
+        expected = policy.actor_outputs(th.as_tensor(obs))
+    for got, want in zip(actor(obs), expected, strict=True):
+        np.testing.assert_allclose(got, want.numpy(), rtol=1e-5, atol=1e-6)

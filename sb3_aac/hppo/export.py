@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from stable_baselines3.common.preprocessing import is_image_space
 from stable_baselines3.common.torch_layers import FlattenExtractor
 
 from sb3_aac.common.network_export import array_of, network_layers, policy_file_contents
@@ -22,13 +23,16 @@ from sb3_aac.runtime.format import output_layout
 
 
 def _observation_scaling(policy: HybridActorCriticPolicy) -> tuple[np.ndarray, np.ndarray]:
-    """``obs_mid`` and ``obs_half`` of the features extractor (the format's ``scaled`` features)."""
+    """``obs_mid`` and ``obs_half`` of the features extractor (the format's ``scaled`` features), with SB3's division
+    of image observations by 255 (``normalize_images``) folded in."""
     extractor = policy.features_extractor
+    # SB3's preprocessing divides an image by 255 before the extractor: (s / 255 - mid) / half = (s - 255 mid) / (255 half)
+    scale = 255.0 if policy.normalize_images and is_image_space(policy.observation_space) else 1.0
     if isinstance(extractor, BoundsScaledFlatten):
-        return array_of(extractor.obs_mid), array_of(extractor.obs_half)
+        return scale * array_of(extractor.obs_mid), scale * array_of(extractor.obs_half)
     if type(extractor) is FlattenExtractor:
         size = int(np.prod(policy.observation_space.shape))  # type: ignore[arg-type]
-        return np.zeros(size), np.ones(size)
+        return np.zeros(size), np.full(size, scale)
     raise ValueError(
         f"Cannot export a HybridPPO policy whose features extractor is {type(extractor).__name__}: the format's networks "
         "read the observation scaled affinely (BoundsScaledFlatten, the default, or FlattenExtractor)"
