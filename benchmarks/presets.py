@@ -180,9 +180,10 @@ ON_POLICY = ("PPO", "A2C")
 # PPO times those figures (docs/benchmarks.md, "Cost"). P-DQN's and MP-DQN's, measured as 350 and 250 before their
 # explicit-gradient training step, times that step's same-run speed-up (``python -m benchmarks.speed.versus 20f1865``:
 # 1.23x and 1.27x before it, 1.69x and 1.76x after). HybridPPO's since its numpy rollouts: 1.54x PPO's rate on the
-# paper env's lanes (``python -m benchmarks.speed.training hppo``, 2026-12-08; 0.82x before). With ENV_STEP_SECONDS they give a learner's rate on each env
-# (training_rate): the local pool starts the longest cells first, a wall-clock cell's schedule horizon is
-# WALL_CLOCK_HEADROOM times what its learner steps in its seconds, and benchmarks.cost estimates a preset's core-hours.
+# paper env's lanes (``python -m benchmarks.speed.training hppo``, 2026-12-08; 0.82x before). With ENV_STEP_SECONDS
+# they give a learner's rate on each env (training_rate): the local pool starts the longest cells first, a wall-clock
+# cell's schedule horizon is WALL_CLOCK_HEADROOM times what its learner steps in its seconds, and benchmarks.cost
+# estimates a preset's core-hours.
 STEPS_PER_SECOND = {
     "SarsaAAC": 30_000,
     "SarsaAAC-deep": 7_000,

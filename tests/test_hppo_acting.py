@@ -12,6 +12,7 @@ from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 
 from sb3_aac import HybridPPO
 from sb3_aac.common.envs import ParameterizedTargetEnv
+from sb3_aac.hppo import hppo as hppo_module
 from sb3_aac.hppo.acting import RolloutActor
 from sb3_aac.hppo.distributions import HybridDistribution, sample_packed
 from sb3_aac.hppo.policies import HybridActorCriticPolicy
@@ -110,8 +111,11 @@ def test_rollout_actor_falls_back_to_torch_where_the_policy_does_not_export(poli
     assert model._n_updates > 0
 
 
-def test_rollout_stores_the_policys_values_and_log_probabilities_per_step_and_env():
-    """The batched pass at the rollout's end writes each (step, env) entry with that row's own evaluation."""
+@pytest.mark.parametrize("evaluation_rows", [hppo_module.EVALUATION_ROWS, 5])
+def test_rollout_stores_the_policys_values_and_log_probabilities_per_step_and_env(evaluation_rows, monkeypatch):
+    """The batched passes at the rollout's end (one, or chunks of 5 rows) write each (step, env) entry with that row's
+    own evaluation."""
+    monkeypatch.setattr(hppo_module, "EVALUATION_ROWS", evaluation_rows)
     env = make_vec_env(ParameterizedTargetEnv, n_envs=3, seed=0)
     model = HybridPPO("MlpPolicy", env, seed=0, n_steps=8, batch_size=8, n_epochs=1)
     model._setup_learn(24, None)

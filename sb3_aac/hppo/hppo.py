@@ -26,6 +26,7 @@ from sb3_aac.hppo.distributions import sample_packed
 from sb3_aac.hppo.policies import HybridActorCriticPolicy, MlpPolicy
 
 SelfHybridPPO = TypeVar("SelfHybridPPO", bound="HybridPPO")
+EVALUATION_ROWS = 16_384  # rows of one batched pass over a rollout (bounds its activations' memory)
 
 
 def clipped_surrogate(advantages: th.Tensor, log_ratio: th.Tensor, clip_range: float) -> tuple[th.Tensor, th.Tensor]:
@@ -286,18 +287,23 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
         return True
 
     def _evaluate_rollout(self, rollout_buffer: HybridRolloutBuffer) -> None:
-        """The values and both log-probabilities of the buffer's steps under the policy that collected them, in one
-        batched pass of :meth:`HybridActorCriticPolicy.evaluate_actions` (the arithmetic the update then runs)."""
+        """The values and both log-probabilities of the buffer's steps under the policy that collected them, in batched
+        passes of :meth:`HybridActorCriticPolicy.evaluate_actions` (the arithmetic the update then runs) of at most
+        ``EVALUATION_ROWS`` rows."""
         rows = rollout_buffer.pos * rollout_buffer.n_envs
-        if rows == 0:
-            return
         obs = rollout_buffer.observations[: rollout_buffer.pos].reshape(rows, *rollout_buffer.obs_shape)
         actions = rollout_buffer.actions[: rollout_buffer.pos].reshape(rows, rollout_buffer.action_dim)
-        with th.no_grad():
-            values, type_log_prob, param_log_prob, _, _ = self.policy.evaluate_actions(
-                rollout_buffer.to_torch(obs), rollout_buffer.to_torch(actions)
-            )
-        rollout_buffer.set_evaluations(values.cpu().numpy(), type_log_prob.cpu().numpy(), param_log_prob.cpu().numpy())
+        parts: list[list[np.ndarray]] = [[], [], []]
+        for start in range(0, rows, EVALUATION_ROWS):
+            chunk = slice(start, start + EVALUATION_ROWS)
+            with th.no_grad():
+                evaluated = self.policy.evaluate_actions(
+                    rollout_buffer.to_torch(obs[chunk]), rollout_buffer.to_torch(actions[chunk])
+                )
+            for part, tensor in zip(parts, evaluated[:3], strict=True):
+                part.append(tensor.cpu().numpy())
+        if rows:
+            rollout_buffer.set_evaluations(*(np.concatenate(part) for part in parts))
 
     def _add_action_stats(self, rollout_buffer: HybridRolloutBuffer) -> None:
         """The executed types, clipped parameters and values of the steps in ``rollout_buffer`` (one call per rollout)."""
