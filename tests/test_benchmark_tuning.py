@@ -67,7 +67,7 @@ def journal_trials(path: Path, study_name: str) -> list[optuna.trial.FrozenTrial
 def test_the_plan_gives_every_learner_a_study_of_the_same_size():
     studies = plan_studies("full")
     # SarsaAAC's TilePolicy and DeepPolicy on every env but HFO, HybridPPO wherever it runs and PPO wherever it runs
-    # but HFO, MP-DQN on the paper env, Platform, Goal and CatchPoint, P-DQN on Platform and Goal, TD3 on both
+    # but HFO, MP-DQN on the paper env, Platform, Goal and CatchPoint, P-DQN on Platform, Goal and CatchPoint, TD3 on both
     # dribbling envs
     sarsa, on_policy = ("SarsaAAC-tile", "SarsaAAC-deep"), ("HybridPPO", "PPO")
     assert [s.name for s in studies] == [
@@ -75,7 +75,7 @@ def test_the_plan_gives_every_learner_a_study_of_the_same_size():
         *(f"v19__{learner}" for learner in (*sarsa, *on_policy, "TD3")),
         *(f"platform__{learner}" for learner in (*sarsa, "MPDQN", "PDQN", *on_policy)),
         *(f"goal__{learner}" for learner in (*sarsa, "HybridPPO", "MPDQN", "PDQN")),
-        *(f"catchpoint__{learner}" for learner in (*sarsa, "MPDQN")),
+        *(f"catchpoint__{learner}" for learner in (*sarsa, "MPDQN", "PDQN")),
         *(f"moving__{learner}" for learner in (*sarsa, *on_policy)),
         *(f"sliding__{learner}" for learner in (*sarsa, *on_policy)),
         "hfo__HybridPPO",
