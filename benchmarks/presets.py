@@ -341,7 +341,7 @@ HEADLINE_SEEDS = tuple(range(10))  # a headline pair's learners: >= 10 seeds (be
 PAPER_SEEDS = tuple(range(5))  # the paper's configs, the long and the wall-clock budgets, and costly default rows
 FEW_SEEDS = tuple(range(3))  # every other learner
 
-# full: the regeneration, sized to about 28 core-hours on the development machine (33.3 measured by 2026-12-08;
+# full: the regeneration, sized to about 28 core-hours on the development machine (33.7 measured by 2026-12-08;
 # ``python -m benchmarks.run --preset full --estimate`` prints each stage's estimate). Where the compute goes
 # decides its shape: the torch learners that take one gradient step per transition train at 110-600 env steps/s on
 # one core (``python -m benchmarks.speed.training pdqn``: MP-DQN 2.5-3 ms a step, as TD3), many times slower than
