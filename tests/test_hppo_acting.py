@@ -40,7 +40,7 @@ def test_sample_packed_is_the_distributions_draw_on_the_same_noise(n_types, n_pa
     th.manual_seed(seed)
     exponential = th.empty(n, n_types).exponential_().numpy()
     normal = th.randn(n, n_params).numpy()
-    packed = sample_packed(logits.numpy().astype(np.float64), mean.numpy(), log_std.numpy(), exponential, normal)
+    packed = sample_packed(logits.numpy().astype(np.float64), mean.numpy(), log_std.exp().numpy(), exponential, normal)
     assert np.array_equal(packed[:, 0], expected[:, 0].numpy())
     np.testing.assert_allclose(packed[:, 1:], expected[:, 1:].numpy(), rtol=1e-6, atol=1e-6)
 
@@ -49,7 +49,7 @@ def test_sample_packed_draws_types_with_the_softmax_probabilities():
     rng = np.random.default_rng(0)
     n, logits = 20_000, np.log([[0.2, 0.5, 0.3]])
     packed = sample_packed(
-        np.repeat(logits + 7.0, n, axis=0), np.zeros((n, 1)), np.zeros(1), rng.exponential(size=(n, 3)), np.zeros((n, 1))
+        np.repeat(logits + 7.0, n, axis=0), np.zeros((n, 1)), np.ones(1), rng.exponential(size=(n, 3)), np.zeros((n, 1))
     )
     shares = np.bincount(packed[:, 0].astype(int), minlength=3) / n
     np.testing.assert_allclose(shares, [0.2, 0.5, 0.3], atol=0.015)  # > 4 standard errors

@@ -30,18 +30,18 @@ HALF_LOG_2PI = 0.5 * math.log(2.0 * math.pi)
 
 
 def sample_packed(
-    type_logits: np.ndarray, mean: np.ndarray, log_std: np.ndarray, exponential: np.ndarray, normal: np.ndarray
+    type_logits: np.ndarray, mean: np.ndarray, std: np.ndarray, exponential: np.ndarray, normal: np.ndarray
 ) -> np.ndarray:
     """
     :meth:`HybridDistribution.sample`'s draw in numpy, on given noise: packed rows ``(n, 1 + n_params)`` of the type
     ``argmax_k p(k|s) / q_k`` (``exponential``: ``q``, ``(n, K)`` draws of Exp(1), which makes the type a draw from
-    ``p``) and every type's parameters ``mean + exp(log_std) * normal`` (``normal``: ``(n, n_params)`` standard
-    normal draws). ``type_logits`` ``(n, K)`` need not be normalised.
+    ``p``) and every type's parameters ``mean + std * normal`` (``std``: ``exp(log_std)``; ``normal``: ``(n, n_params)``
+    standard normal draws). ``type_logits`` ``(n, K)`` need not be normalised.
     """
     # p(k|s) up to a positive factor per row, which the argmax ignores
     probs = np.exp(type_logits - type_logits.max(axis=1, keepdims=True))
     types = (probs / exponential).argmax(axis=1)
-    params = mean + np.exp(log_std) * normal
+    params = mean + std * normal
     return np.concatenate((types[:, None].astype(params.dtype), params), axis=1)
 
 

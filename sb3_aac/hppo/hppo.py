@@ -235,7 +235,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
         self.policy.set_training_mode(False)
         arrays, spec = array_path(env), self.policy.spec
         actor = RolloutActor(self.policy)
-        log_std = self.policy.log_std.detach().cpu().numpy()
+        std = self.policy.log_std.detach().exp().cpu().numpy()  # fixed within a rollout
         exponential = th.empty((n_rollout_steps, env.num_envs, spec.n_types)).exponential_().numpy()
         normal = th.randn((n_rollout_steps, env.num_envs, spec.n_params)).numpy()
         n_steps = 0
@@ -245,7 +245,7 @@ class HybridPPO(GuardedAlgorithmMixin, EpisodeStatsMixin, OnPolicyAlgorithm):
             type_logits, mean = actor(self._last_obs)  # type: ignore[arg-type]
             if not np.isfinite(type_logits).all():
                 self._raise_divergence("the policy's output (the type logits)")
-            packed = sample_packed(type_logits, mean, log_std, exponential[n_steps], normal[n_steps])
+            packed = sample_packed(type_logits, mean, std, exponential[n_steps], normal[n_steps])
             if not np.isfinite(packed).all():
                 self._raise_divergence("the policy's output (the parameter means or standard deviations)")
             k, params = packed[:, 0].astype(np.int64), np.clip(packed[:, 1:], -1.0, 1.0)
